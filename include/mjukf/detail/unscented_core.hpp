@@ -1,0 +1,97 @@
+#pragma once
+
+// The workspace and the arithmetic shared by the three filters: draw sigma points, take the moments of
+// the propagated points (§2), and the Kalman correction from measured points (§3). The filters only
+// say how a point is propagated and measured. Every result goes to an output argument so that a filter
+// can check it before committing it (the strong guarantee of the failure policy).
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+
+#include "mjukf/diagnostics.hpp"
+#include "mjukf/sigma_points.hpp"
+#include "mjukf/status.hpp"
+#include "mjukf/unscented_transform.hpp"
+
+namespace mjukf::detail {
+
+template <class Scalar, int L, int M>
+class UnscentedCore {
+ public:
+  using SigmaPoints = MerweScaledSigmaPoints<Scalar, L>;
+  static constexpr int Count = SigmaPoints::Count;
+  using Vector = Eigen::Matrix<Scalar, L, 1>;
+  using Matrix = Eigen::Matrix<Scalar, L, L>;
+  using Points = typename SigmaPoints::Points;
+  using MeasVector = Eigen::Matrix<Scalar, M, 1>;
+  using MeasMatrix = Eigen::Matrix<Scalar, M, M>;
+  using MeasPoints = Eigen::Matrix<Scalar, M, Count>;
+  using Gain = Eigen::Matrix<Scalar, L, M>;
+  using Diagnostics = UpdateDiagnostics<Scalar, M>;
+
+  explicit UnscentedCore(const SigmaPointParameters<Scalar>& parameters) : sigmaPoints_(parameters) {}
+
+  /// §1: draws the points of (mean, cov) into workPoints(), leaving points() as they are.
+  Status draw(const Vector& mean, const Matrix& cov) { return sigmaPoints_.generate(mean, cov, workPoints_); }
+
+  /// §2: x̂⁻ = Σ Wmᵢ χᵢ⁺, P⁻ = Σ Wcᵢ (χᵢ⁺ − x̂⁻)(χᵢ⁺ − x̂⁻)ᵀ + Q, from the propagated workPoints().
+  void predict(const Matrix& processNoise, Vector& mean, Matrix& cov) {
+    unscentedMean(workPoints_, sigmaPoints_.meanWeights(), mean);
+    stateDeviations_.noalias() = workPoints_.colwise() - mean;
+    unscentedCovarianceFromDeviations(stateDeviations_, stateDeviations_, sigmaPoints_.covarianceWeights(), cov);
+    cov += processNoise;
+  }
+
+  /// §3, from `points` about `predictedMean` and their images measuredPoints(): writes the corrected
+  /// mean and covariance and the diagnostics. The inputs are left untouched; on a status other than Ok
+  /// the outputs are unspecified.
+  Status correct(const Points& points, const Vector& predictedMean, const Matrix& predictedCov, const MeasVector& y,
+                 const MeasMatrix& measurementNoise, Vector& mean, Matrix& cov, Diagnostics& diagnostics) {
+    if (!measuredPoints_.allFinite()) return Status::NonFiniteResult;  // the model's g gave NaN or Inf
+    const auto& wc = sigmaPoints_.covarianceWeights();
+    MeasVector predictedMeasurement;
+    unscentedMean(measuredPoints_, sigmaPoints_.meanWeights(), predictedMeasurement);  // ŷ
+    measurementDeviations_.noalias() = measuredPoints_.colwise() - predictedMeasurement;
+    stateDeviations_.noalias() = points.colwise() - predictedMean;
+    unscentedCovarianceFromDeviations(measurementDeviations_, measurementDeviations_, wc,
+                                      diagnostics.innovationCovariance);
+    diagnostics.innovationCovariance += measurementNoise;  // P_yy
+    unscentedCovarianceFromDeviations(stateDeviations_, measurementDeviations_, wc, crossCovariance_);  // P_xy
+
+    innovationLlt_.compute(diagnostics.innovationCovariance);
+    if (!diagnostics.innovationCovariance.allFinite() || innovationLlt_.info() != Eigen::Success)
+      return Status::InnovationNotPositiveDefinite;
+    // K = P_xy P_yy⁻¹, as Kᵀ = P_yy⁻¹ P_xyᵀ with the Cholesky factor (P_yy is symmetric).
+    gainTransposed_ = innovationLlt_.solve(crossCovariance_.transpose());
+    diagnostics.innovation = y - predictedMeasurement;
+    mean = predictedMean;
+    mean.noalias() += gainTransposed_.transpose() * diagnostics.innovation;
+    // P = P⁻ − K P_yy Kᵀ = P⁻ − P_xy Kᵀ
+    cov = predictedCov;
+    cov.noalias() -= crossCovariance_ * gainTransposed_;
+    diagnostics.nis = diagnostics.innovation.dot(innovationLlt_.solve(diagnostics.innovation));
+    return Status::Ok;
+  }
+
+  /// Makes the work points the filter's points, once the step that made them has succeeded.
+  void commitPoints() { points_ = workPoints_; }
+
+  Points& workPoints() { return workPoints_; }
+  const Points& points() const { return points_; }
+  MeasPoints& measuredPoints() { return measuredPoints_; }
+  const MeasPoints& measuredPoints() const { return measuredPoints_; }
+  const SigmaPoints& sigmaPoints() const { return sigmaPoints_; }
+
+ private:
+  SigmaPoints sigmaPoints_;
+  Points points_;                 // the filter's propagated points χᵢ⁺, used by the measurement update
+  Points workPoints_;             // drawn, then propagated in place, before they are committed
+  MeasPoints measuredPoints_;     // Yᵢ = g(χᵢ⁺)
+  Points stateDeviations_;        // χᵢ⁺ − x̂⁻
+  MeasPoints measurementDeviations_;  // Yᵢ − ŷ
+  Gain crossCovariance_;          // P_xy
+  Eigen::Matrix<Scalar, M, L> gainTransposed_;  // Kᵀ
+  Eigen::LLT<MeasMatrix> innovationLlt_;
+};
+
+}  // namespace mjukf::detail

@@ -1,0 +1,75 @@
+#pragma once
+
+// Checks of user settings, run once at construction. They throw std::invalid_argument with a message
+// that names the offending setting; none of them runs on the per-step path.
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <Eigen/Eigenvalues>
+
+namespace mjukf::detail {
+
+[[noreturn]] inline void throwInvalid(const char* owner, const char* setting, const std::string& what) {
+  throw std::invalid_argument(std::string(owner) + ": setting '" + setting + "' " + what);
+}
+
+template <class Scalar, std::enable_if_t<std::is_floating_point_v<Scalar>, int> = 0>
+void requireFinite(const char* owner, const char* setting, Scalar value) {
+  if (!std::isfinite(value)) throwInvalid(owner, setting, "must be finite");
+}
+
+template <class Derived>
+void requireFinite(const char* owner, const char* setting, const Eigen::MatrixBase<Derived>& m) {
+  if (!m.allFinite()) throwInvalid(owner, setting, "must be finite (it contains NaN or Inf)");
+}
+
+// Symmetric to a tolerance relative to the largest entry: generous enough for matrices a user computed
+// as products, tight enough to catch a transposed or mistyped entry.
+template <class Derived>
+void requireSymmetric(const char* owner, const char* setting, const Eigen::MatrixBase<Derived>& m) {
+  using Scalar = typename Derived::Scalar;
+  requireFinite(owner, setting, m);
+  const Scalar scale = std::max(Scalar(1), m.cwiseAbs().maxCoeff());
+  const Scalar tolerance = Scalar(1000) * std::numeric_limits<Scalar>::epsilon() * scale;
+  if ((m - m.transpose()).cwiseAbs().maxCoeff() > tolerance) throwInvalid(owner, setting, "must be symmetric");
+}
+
+template <class Derived>
+void requirePositiveDefinite(const char* owner, const char* setting, const Eigen::MatrixBase<Derived>& m) {
+  requireSymmetric(owner, setting, m);
+  Eigen::LLT<typename Derived::PlainObject> llt(m);
+  if (llt.info() != Eigen::Success) throwInvalid(owner, setting, "must be positive definite");
+}
+
+// Positive semi-definite: the smallest eigenvalue may be zero up to rounding (a Q with zero rows is legal).
+template <class Derived>
+void requirePositiveSemiDefinite(const char* owner, const char* setting, const Eigen::MatrixBase<Derived>& m) {
+  using Scalar = typename Derived::Scalar;
+  requireSymmetric(owner, setting, m);
+  Eigen::SelfAdjointEigenSolver<typename Derived::PlainObject> eigen(m, Eigen::EigenvaluesOnly);
+  const Scalar scale = std::max(Scalar(1), m.cwiseAbs().maxCoeff());
+  if (eigen.info() != Eigen::Success ||
+      eigen.eigenvalues().minCoeff() < -Scalar(1000) * std::numeric_limits<Scalar>::epsilon() * scale)
+    throwInvalid(owner, setting, "must be positive semi-definite");
+}
+
+}  // namespace mjukf::detail
+
+namespace mjukf::detail {
+
+// P₀ and R symmetric positive definite, Q symmetric positive semi-definite: the settings all three
+// filters share.
+template <class Settings>
+void validateNoiseSettings(const char* owner, const Settings& settings) {
+  requirePositiveDefinite(owner, "initialCovariance (P0)", settings.initialCovariance);
+  requirePositiveSemiDefinite(owner, "processNoise (Q)", settings.processNoise);
+  requirePositiveDefinite(owner, "measurementNoise (R)", settings.measurementNoise);
+}
+
+}  // namespace mjukf::detail

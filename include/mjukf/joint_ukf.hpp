@@ -1,0 +1,158 @@
+#pragma once
+
+/// \file
+/// The joint UKF (JUKF): states and parameters in one augmented vector (algorithms.md §4).
+
+#include <Eigen/Core>
+
+#include "mjukf/detail/propagation.hpp"
+#include "mjukf/detail/time_stepping.hpp"
+#include "mjukf/detail/unscented_core.hpp"
+#include "mjukf/detail/validation.hpp"
+#include "mjukf/diagnostics.hpp"
+#include "mjukf/integrators/i_tr_bdf2.hpp"
+#include "mjukf/model.hpp"
+#include "mjukf/sigma_points.hpp"
+#include "mjukf/status.hpp"
+
+namespace mjukf {
+
+/// Settings of `JointUkf`, validated at construction. Matrices are of the augmented vector [x; θ].
+template <class Model>
+struct JointUkfSettings {
+  using Scalar = typename Model::Scalar;
+  static constexpr int AugmentedDim = Model::StateDim + Model::ParamDim;
+  using AugmentedMatrix = Eigen::Matrix<Scalar, AugmentedDim, AugmentedDim>;
+  using MeasMatrix = Eigen::Matrix<Scalar, Model::MeasDim, Model::MeasDim>;
+  SigmaPointParameters<Scalar> sigmaPoints;                      ///< α, β, κ
+  AugmentedMatrix initialCovariance = AugmentedMatrix::Zero();  ///< P₀ of [x; θ], symmetric positive definite
+  AugmentedMatrix processNoise = AugmentedMatrix::Zero();       ///< Q of [x; θ], positive semi-definite
+  MeasMatrix measurementNoise = MeasMatrix::Zero();             ///< R, symmetric positive definite
+};
+
+/// Joint unscented Kalman filter: estimates z = [x; θ] with L = n + p, the parameters constant in the
+/// model (θ̇ = 0). A time update costs 2(n + p) + 1 model propagations.
+///
+/// Every matrix is sized at compile time and no per-step call allocates. A call that returns a
+/// Status other than Ok leaves the filter exactly as it was.
+template <class Model_, class Integrator_ = ITrBdf2<typename Model_::Scalar>>
+class JointUkf : public detail::TimeStepping<JointUkf<Model_, Integrator_>, Model_> {
+  static_assert(checkModel<Model_, 1>());
+  friend class detail::TimeStepping<JointUkf, Model_>;
+
+ public:
+  using Model = Model_;
+  using Integrator = Integrator_;
+  using Scalar = typename Model::Scalar;
+  static constexpr int StateDim = Model::StateDim;
+  static constexpr int ParamDim = Model::ParamDim;
+  static constexpr int MeasDim = Model::MeasDim;
+  static constexpr int AugmentedDim = StateDim + ParamDim;
+  static constexpr int SigmaPointCount = 2 * AugmentedDim + 1;
+  using State = typename Model::State;
+  using Param = typename Model::Param;
+  using Meas = typename Model::Meas;
+  using Input = typename Model::Input;
+  using AugmentedState = Eigen::Matrix<Scalar, AugmentedDim, 1>;
+  using AugmentedMatrix = Eigen::Matrix<Scalar, AugmentedDim, AugmentedDim>;
+  using MeasMatrix = Eigen::Matrix<Scalar, MeasDim, MeasDim>;
+  using Diagnostics = UpdateDiagnostics<Scalar, MeasDim>;
+
+  using Settings = JointUkfSettings<Model>;
+
+  /// Throws std::invalid_argument naming the setting when a setting or the initial values are invalid.
+  JointUkf(const Model& model, const State& initialState, const Param& initialParameters,
+           const Settings& settings, const Integrator& integrator = Integrator())
+      : model_(model), integrator_(integrator), settings_(settings), core_(settings.sigmaPoints),
+        covariance_(settings.initialCovariance) {
+    constexpr const char* owner = "mjukf::JointUkf";
+    detail::validateNoiseSettings(owner, settings);
+    detail::requireFinite(owner, "initialState", initialState);
+    detail::requireFinite(owner, "initialParameters", initialParameters);
+    augmented_ << initialState, initialParameters;
+  }
+
+  /// Measurement update, algorithms.md §3 on the augmented vector, g(z) = g(x, θ). Uses the sigma
+  /// points of the last time update as they are; if the filter has none, it draws them from the
+  /// current mean and covariance.
+  Status measurementUpdate(const Meas& y) {
+    if (!y.allFinite()) return Status::NonFiniteMeasurement;
+    if (!hasPropagatedPoints_)
+      if (const Status s = core_.draw(augmented_, covariance_); s != Status::Ok) return s;
+    const auto& points = hasPropagatedPoints_ ? core_.points() : core_.workPoints();
+    for (int i = 0; i < SigmaPointCount; ++i)  // Yᵢ = g(xᵢ, θᵢ) of zᵢ = [xᵢ; θᵢ]
+      core_.measuredPoints().col(i) = model_.measurement(points.col(i).template head<StateDim>(),
+                                                         points.col(i).template tail<ParamDim>());
+    if (const Status s = core_.correct(points, augmented_, covariance_, y, settings_.measurementNoise,
+                                       candidateAugmented_, candidateCovariance_, candidateDiagnostics_);
+        s != Status::Ok)
+      return s;
+    if (!candidateAugmented_.allFinite() || !candidateCovariance_.allFinite()) return Status::NonFiniteResult;
+    augmented_ = candidateAugmented_;
+    covariance_ = candidateCovariance_;
+    diagnostics_ = candidateDiagnostics_;
+    hasPropagatedPoints_ = false;
+    return Status::Ok;
+  }
+
+  /// The state block x of the augmented mean.
+  State state() const { return augmented_.template head<StateDim>(); }
+  /// The parameter block θ of the augmented mean.
+  Param parameters() const { return augmented_.template tail<ParamDim>(); }
+  const AugmentedState& augmentedState() const { return augmented_; }
+  /// Covariance of the augmented vector [x; θ].
+  const AugmentedMatrix& covariance() const { return covariance_; }
+  /// Innovation, its covariance and the NIS of the last successful measurement update.
+  const Diagnostics& lastUpdate() const { return diagnostics_; }
+  /// True when the sigma points of the last time update are still the filter's.
+  bool hasPropagatedPoints() const { return hasPropagatedPoints_; }
+  const Model& model() const { return model_; }
+  const Integrator& integrator() const { return integrator_; }
+  const Settings& settings() const { return settings_; }
+
+ private:
+  template <class InputSource>
+  Status timeUpdateWith(const InputSource& input, Scalar t, Scalar h, int steps) {
+    if (const Status s = detail::checkStep(t, h, steps); s != Status::Ok) return s;
+    if (const Status s = core_.draw(augmented_, covariance_); s != Status::Ok) return s;
+    auto& points = core_.workPoints();
+    for (int i = 0; i < SigmaPointCount; ++i) {  // [xᵢ; θᵢ]⁺ = [Φ_h(xᵢ; t, θᵢ); θᵢ]
+      const Param theta = points.col(i).template tail<ParamDim>();
+      points.col(i).template head<StateDim>() =
+          detail::propagate(model_, integrator_, input, theta, t, h, steps, points.col(i).template head<StateDim>());
+    }
+    if (!points.allFinite()) return Status::NonFiniteResult;
+    core_.predict(settings_.processNoise, candidateAugmented_, candidateCovariance_);
+    if (!candidateAugmented_.allFinite() || !candidateCovariance_.allFinite()) return Status::NonFiniteResult;
+    core_.commitPoints();
+    augmented_ = candidateAugmented_;
+    covariance_ = candidateCovariance_;
+    hasPropagatedPoints_ = true;
+    return Status::Ok;
+  }
+
+  template <class InputSource>
+  Status propagateMeanWith(const InputSource& input, Scalar t, Scalar h, int steps) {
+    if (const Status s = detail::checkStep(t, h, steps); s != Status::Ok) return s;
+    const State x = detail::propagate(model_, integrator_, input, parameters(), t, h, steps, state());
+    if (!x.allFinite()) return Status::NonFiniteResult;
+    augmented_.template head<StateDim>() = x;
+    hasPropagatedPoints_ = false;
+    return Status::Ok;
+  }
+
+  Model model_;
+  Integrator integrator_;
+  Settings settings_;
+  detail::UnscentedCore<Scalar, AugmentedDim, MeasDim> core_;
+  AugmentedState augmented_;
+  AugmentedMatrix covariance_;
+  Diagnostics diagnostics_;
+  bool hasPropagatedPoints_ = false;
+  // Workspace: results are computed here and committed only when the whole step succeeded.
+  AugmentedState candidateAugmented_;
+  AugmentedMatrix candidateCovariance_;
+  Diagnostics candidateDiagnostics_;
+};
+
+}  // namespace mjukf

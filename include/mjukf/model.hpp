@@ -1,0 +1,98 @@
+#pragma once
+
+/// \file
+/// The model concept every filter is generic over, checked at compile time.
+///
+/// A model is a plain struct:
+///
+/// \code
+/// struct MyPlant {
+///   using Scalar = double;
+///   static constexpr int StateDim = 2, ParamDim = 1, MeasDim = 2, InputDim = 1;
+///   using State = Eigen::Matrix<Scalar, StateDim, 1>;   // and Param, Meas, Input likewise
+///   // ẋ = f(x, u, θ, t)
+///   State derivative(Scalar t, const State& x, const Input& u, const Param& theta) const;
+///   // y = g(x, θ)
+///   Meas measurement(const State& x, const Param& theta) const;
+///   // Optional: a known input signal u(t), evaluated at every stage time of the integrator.
+///   Input input(Scalar t) const;
+/// };
+/// \endcode
+///
+/// Physical constants are ordinary data members, so the same model can be built with other constants.
+
+#include <type_traits>
+#include <utility>
+
+#include <Eigen/Core>
+
+namespace mjukf {
+
+namespace detail {
+
+template <class T, class = void>
+struct HasInputSignal : std::false_type {};
+template <class T>
+struct HasInputSignal<T, std::void_t<decltype(std::declval<const T&>().input(
+                             std::declval<typename T::Scalar>()))>> : std::true_type {};
+
+template <class T, class = void>
+struct HasDerivative : std::false_type {};
+template <class T>
+struct HasDerivative<T, std::void_t<decltype(std::declval<const T&>().derivative(
+                            std::declval<typename T::Scalar>(), std::declval<const typename T::State&>(),
+                            std::declval<const typename T::Input&>(),
+                            std::declval<const typename T::Param&>()))>>
+    : std::is_convertible<decltype(std::declval<const T&>().derivative(
+                              std::declval<typename T::Scalar>(), std::declval<const typename T::State&>(),
+                              std::declval<const typename T::Input&>(),
+                              std::declval<const typename T::Param&>())),
+                          typename T::State> {};
+
+template <class T, class = void>
+struct HasMeasurement : std::false_type {};
+template <class T>
+struct HasMeasurement<T, std::void_t<decltype(std::declval<const T&>().measurement(
+                             std::declval<const typename T::State&>(),
+                             std::declval<const typename T::Param&>()))>>
+    : std::is_convertible<decltype(std::declval<const T&>().measurement(
+                              std::declval<const typename T::State&>(),
+                              std::declval<const typename T::Param&>())),
+                          typename T::Meas> {};
+
+template <class Scalar, int Rows>
+using Vector = Eigen::Matrix<Scalar, Rows, 1>;
+
+}  // namespace detail
+
+/// True when `Model` provides `input(t)`, a known input signal; filters then offer time updates that
+/// evaluate it at each stage time.
+template <class Model>
+inline constexpr bool hasInputSignal = detail::HasInputSignal<Model>::value;
+
+/// Checks the model concept at compile time; every filter calls it. `MinParamDim` is 1 for the joint
+/// filters, which estimate parameters, and 0 for the plain UKF.
+template <class Model, int MinParamDim = 0>
+constexpr bool checkModel() {
+  using Scalar = typename Model::Scalar;
+  static_assert(std::is_floating_point_v<Scalar>, "Model::Scalar must be float, double or long double");
+  static_assert(Model::StateDim > 0, "Model::StateDim must be positive");
+  static_assert(Model::ParamDim >= MinParamDim, "Model::ParamDim is too small for this filter");
+  static_assert(Model::MeasDim > 0, "Model::MeasDim must be positive");
+  static_assert(Model::InputDim >= 0, "Model::InputDim must not be negative");
+  static_assert(std::is_same_v<typename Model::State, detail::Vector<Scalar, Model::StateDim>>,
+                "Model::State must be Eigen::Matrix<Scalar, StateDim, 1>");
+  static_assert(std::is_same_v<typename Model::Param, detail::Vector<Scalar, Model::ParamDim>>,
+                "Model::Param must be Eigen::Matrix<Scalar, ParamDim, 1>");
+  static_assert(std::is_same_v<typename Model::Meas, detail::Vector<Scalar, Model::MeasDim>>,
+                "Model::Meas must be Eigen::Matrix<Scalar, MeasDim, 1>");
+  static_assert(std::is_same_v<typename Model::Input, detail::Vector<Scalar, Model::InputDim>>,
+                "Model::Input must be Eigen::Matrix<Scalar, InputDim, 1>");
+  static_assert(detail::HasDerivative<Model>::value,
+                "Model needs `State derivative(Scalar t, const State&, const Input&, const Param&) const`");
+  static_assert(detail::HasMeasurement<Model>::value,
+                "Model needs `Meas measurement(const State&, const Param&) const`");
+  return true;
+}
+
+}  // namespace mjukf

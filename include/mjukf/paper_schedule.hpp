@@ -1,0 +1,71 @@
+#pragma once
+
+/// \file
+/// The schedule of the paper's experiments (algorithms.md §7) and its accuracy metric (§8).
+
+#include <cmath>
+
+#include <Eigen/Core>
+
+#include "mjukf/status.hpp"
+
+namespace mjukf {
+
+/// Where a scheduled run stopped: Status::Ok after the last row, otherwise the status of the refused
+/// step and the row whose estimate it would have produced.
+struct ScheduleOutcome {
+  Status status = Status::Ok;
+  long row = 0;
+};
+
+/// Drives `filter` over data rows k = 0 … rows − 1 at t_k = k h, the way the paper's experiments do:
+/// for k = 0 … rows − 2, when (k + 1) is a multiple of `measurementEvery`, an unscented time update
+/// from t_k over one step followed by a measurement update with `measurementAt(k + 1)`; otherwise the
+/// mean alone is propagated open loop and P is left as it is.
+///
+/// `record(k, filter)` is called for every row: row 0 holds the initial estimate and the estimate
+/// after step k belongs to row k + 1. The run stops at the first refused step.
+template <class Filter, class MeasurementAt, class Record>
+ScheduleOutcome runPaperSchedule(Filter& filter, long rows, typename Filter::Scalar h, int measurementEvery,
+                                 MeasurementAt&& measurementAt, Record&& record) {
+  using Scalar = typename Filter::Scalar;
+  if (rows < 1) return {Status::Ok, 0};
+  if (measurementEvery < 1) return {Status::InvalidStepSize, 0};
+  record(0L, static_cast<const Filter&>(filter));
+  for (long k = 0; k + 1 < rows; ++k) {
+    const Scalar t = Scalar(k) * h;
+    Status status;
+    if ((k + 1) % measurementEvery == 0) {
+      status = filter.timeUpdate(t, h);
+      if (status == Status::Ok) status = filter.measurementUpdate(measurementAt(k + 1));
+    } else {
+      status = filter.propagateMean(t, h);
+    }
+    if (status != Status::Ok) return {status, k + 1};
+    record(k + 1, static_cast<const Filter&>(filter));
+  }
+  return {Status::Ok, rows - 1};
+}
+
+/// Root-mean-square error of a parameter vector against its truth, accumulated row by row (eq. 16).
+template <class Scalar, int Dim>
+class RmseAccumulator {
+ public:
+  using Vector = Eigen::Matrix<Scalar, Dim, 1>;
+
+  void add(const Vector& estimate, const Vector& truth) {
+    sumOfSquares_ += (estimate - truth).array().square().matrix();
+    ++count_;
+  }
+  /// The RMSE of each component over the rows added so far (NaN before the first row).
+  Vector value() const {
+    return (sumOfSquares_ / Scalar(count_)).array().sqrt().matrix();
+  }
+  long count() const { return count_; }
+
+ private:
+  Vector sumOfSquares_ = Vector::Zero();
+  long count_ = 0;
+};
+
+}  // namespace mjukf

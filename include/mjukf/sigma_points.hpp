@@ -1,0 +1,98 @@
+#pragma once
+
+/// \file
+/// Scaled sigma points of van der Merwe (algorithms.md §1).
+
+#include <cmath>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+
+#include "mjukf/detail/validation.hpp"
+#include "mjukf/status.hpp"
+
+namespace mjukf {
+
+/// The three scaling parameters of the sigma points. The paper uses α = 1, β = 2, κ = 0.
+template <class Scalar>
+struct SigmaPointParameters {
+  Scalar alpha = 1;  ///< Spread of the points around the mean; must be positive.
+  Scalar beta = 2;   ///< Prior knowledge of the distribution (2 is optimal for a Gaussian).
+  Scalar kappa = 0;  ///< Secondary scaling; L + λ = α²(L + κ) must be positive.
+};
+
+/// The 2L + 1 scaled sigma points of an L-dimensional Gaussian and their weights.
+///
+/// The weights are computed once at construction; `generate` draws the points of a mean and
+/// covariance without allocating (the Cholesky workspace is a member).
+template <class Scalar_, int L>
+class MerweScaledSigmaPoints {
+  static_assert(L > 0, "the dimension of the sigma points must be positive");
+
+ public:
+  using Scalar = Scalar_;
+  static constexpr int Dim = L;
+  static constexpr int Count = 2 * L + 1;
+  using Vector = Eigen::Matrix<Scalar, L, 1>;
+  using Matrix = Eigen::Matrix<Scalar, L, L>;
+  using Points = Eigen::Matrix<Scalar, L, Count>;
+  using Weights = Eigen::Matrix<Scalar, Count, 1>;
+
+  /// Throws std::invalid_argument naming the parameter when α ≤ 0, a value is not finite, or
+  /// L + λ ≤ 0.
+  explicit MerweScaledSigmaPoints(const SigmaPointParameters<Scalar>& parameters = {}) : parameters_(parameters) {
+    constexpr const char* owner = "mjukf::MerweScaledSigmaPoints";
+    detail::requireFinite(owner, "alpha", parameters.alpha);
+    detail::requireFinite(owner, "beta", parameters.beta);
+    detail::requireFinite(owner, "kappa", parameters.kappa);
+    if (!(parameters.alpha > 0)) detail::throwInvalid(owner, "alpha", "must be positive");
+    const Scalar alpha2 = parameters.alpha * parameters.alpha;
+    lambda_ = alpha2 * (Scalar(L) + parameters.kappa) - Scalar(L);  // λ = α²(L + κ) − L
+    const Scalar spread = Scalar(L) + lambda_;                      // L + λ
+    if (!(spread > 0) || !std::isfinite(spread))
+      detail::throwInvalid(owner, "kappa", "gives L + lambda <= 0 (needs alpha^2 (L + kappa) > 0)");
+    gamma_ = std::sqrt(spread);
+    meanWeights_.setConstant(Scalar(1) / (Scalar(2) * spread));
+    covarianceWeights_ = meanWeights_;
+    meanWeights_(0) = lambda_ / spread;
+    covarianceWeights_(0) = meanWeights_(0) + Scalar(1) - alpha2 + parameters.beta;
+  }
+
+  /// Writes the points of (mean, cov) into `points`: column 0 is the mean, columns 1…L and L+1…2L
+  /// are the mean plus and minus γ times the columns of the lower Cholesky factor of `cov`.
+  /// Returns Status::NotPositiveDefinite, with `points` untouched, when `cov` has no factor or is not
+  /// finite.
+  Status generate(const Vector& mean, const Matrix& cov, Points& points) {
+    if (!cov.allFinite() || !mean.allFinite()) return Status::NotPositiveDefinite;
+    llt_.compute(cov);
+    if (llt_.info() != Eigen::Success) return Status::NotPositiveDefinite;
+    points.col(0) = mean;
+    for (int i = 0; i < L; ++i) {
+      // Columns of S, where cov = S Sᵀ (rows would be wrong for a correlated cov).
+      const auto column = llt_.matrixLLT().col(i);
+      points.col(1 + i) = mean;
+      points.col(1 + L + i) = mean;
+      for (int r = i; r < L; ++r) {  // S is lower triangular: rows above the diagonal are zero.
+        points(r, 1 + i) += gamma_ * column(r);
+        points(r, 1 + L + i) -= gamma_ * column(r);
+      }
+    }
+    return Status::Ok;
+  }
+
+  const Weights& meanWeights() const { return meanWeights_; }
+  const Weights& covarianceWeights() const { return covarianceWeights_; }
+  const SigmaPointParameters<Scalar>& parameters() const { return parameters_; }
+  Scalar lambda() const { return lambda_; }
+  Scalar gamma() const { return gamma_; }
+
+ private:
+  SigmaPointParameters<Scalar> parameters_;
+  Scalar lambda_;
+  Scalar gamma_;
+  Weights meanWeights_;
+  Weights covarianceWeights_;
+  Eigen::LLT<Matrix> llt_;
+};
+
+}  // namespace mjukf

@@ -1,0 +1,150 @@
+#pragma once
+
+/// \file
+/// The unscented Kalman filter with known parameters (algorithms.md §1–3).
+
+#include <Eigen/Core>
+
+#include "mjukf/detail/propagation.hpp"
+#include "mjukf/detail/time_stepping.hpp"
+#include "mjukf/detail/unscented_core.hpp"
+#include "mjukf/detail/validation.hpp"
+#include "mjukf/diagnostics.hpp"
+#include "mjukf/integrators/i_tr_bdf2.hpp"
+#include "mjukf/model.hpp"
+#include "mjukf/sigma_points.hpp"
+#include "mjukf/status.hpp"
+
+namespace mjukf {
+
+/// Settings of `Ukf`, validated at construction.
+template <class Model>
+struct UkfSettings {
+  using Scalar = typename Model::Scalar;
+  using StateMatrix = Eigen::Matrix<Scalar, Model::StateDim, Model::StateDim>;
+  using MeasMatrix = Eigen::Matrix<Scalar, Model::MeasDim, Model::MeasDim>;
+  SigmaPointParameters<Scalar> sigmaPoints;                ///< α, β, κ
+  StateMatrix initialCovariance = StateMatrix::Zero();    ///< P₀, symmetric positive definite
+  StateMatrix processNoise = StateMatrix::Zero();         ///< Q, symmetric positive semi-definite
+  MeasMatrix measurementNoise = MeasMatrix::Zero();       ///< R, symmetric positive definite
+};
+
+/// Unscented Kalman filter of the state of `Model`, whose parameters are known and fixed.
+///
+/// 2n + 1 sigma points, each propagated with `Integrator`. Every matrix is sized at compile time and
+/// no per-step call allocates. A call that returns a Status other than Ok leaves the filter exactly
+/// as it was.
+template <class Model_, class Integrator_ = ITrBdf2<typename Model_::Scalar>>
+class Ukf : public detail::TimeStepping<Ukf<Model_, Integrator_>, Model_> {
+  static_assert(checkModel<Model_>());
+  friend class detail::TimeStepping<Ukf, Model_>;
+
+ public:
+  using Model = Model_;
+  using Integrator = Integrator_;
+  using Scalar = typename Model::Scalar;
+  static constexpr int StateDim = Model::StateDim;
+  static constexpr int ParamDim = Model::ParamDim;
+  static constexpr int MeasDim = Model::MeasDim;
+  static constexpr int SigmaPointCount = 2 * StateDim + 1;
+  using State = typename Model::State;
+  using Param = typename Model::Param;
+  using Meas = typename Model::Meas;
+  using Input = typename Model::Input;
+  using StateMatrix = Eigen::Matrix<Scalar, StateDim, StateDim>;
+  using MeasMatrix = Eigen::Matrix<Scalar, MeasDim, MeasDim>;
+  using Diagnostics = UpdateDiagnostics<Scalar, MeasDim>;
+
+  using Settings = UkfSettings<Model>;
+
+  /// Throws std::invalid_argument naming the setting when a setting or the initial values are invalid.
+  Ukf(const Model& model, const State& initialState, const Param& parameters, const Settings& settings,
+      const Integrator& integrator = Integrator())
+      : model_(model), integrator_(integrator), settings_(settings), core_(settings.sigmaPoints),
+        state_(initialState), covariance_(settings.initialCovariance), parameters_(parameters) {
+    constexpr const char* owner = "mjukf::Ukf";
+    detail::validateNoiseSettings(owner, settings);
+    detail::requireFinite(owner, "initialState", initialState);
+    detail::requireFinite(owner, "parameters", parameters);
+  }
+
+  /// Measurement update, algorithms.md §3 (Algorithm 1 of the paper). Uses the sigma points of the
+  /// last time update as they are; if the filter has none (no time update since the last update or
+  /// open-loop propagation), it draws them from the current mean and covariance.
+  Status measurementUpdate(const Meas& y) {
+    if (!y.allFinite()) return Status::NonFiniteMeasurement;
+    // The points of the last time update, or, when there are none, points drawn from the current
+    // mean and covariance into the workspace.
+    if (!hasPropagatedPoints_)
+      if (const Status s = core_.draw(state_, covariance_); s != Status::Ok) return s;
+    const auto& points = hasPropagatedPoints_ ? core_.points() : core_.workPoints();
+    for (int i = 0; i < SigmaPointCount; ++i)
+      core_.measuredPoints().col(i) = model_.measurement(points.col(i), parameters_);  // Yᵢ = g(χᵢ⁺)
+    if (const Status s = core_.correct(points, state_, covariance_, y, settings_.measurementNoise,
+                                       candidateState_, candidateCovariance_, candidateDiagnostics_);
+        s != Status::Ok)
+      return s;
+    if (!candidateState_.allFinite() || !candidateCovariance_.allFinite()) return Status::NonFiniteResult;
+    state_ = candidateState_;
+    covariance_ = candidateCovariance_;
+    diagnostics_ = candidateDiagnostics_;
+    hasPropagatedPoints_ = false;
+    return Status::Ok;
+  }
+
+  const State& state() const { return state_; }
+  const StateMatrix& covariance() const { return covariance_; }
+  /// The fixed parameters the model is evaluated with.
+  const Param& parameters() const { return parameters_; }
+  /// Innovation, its covariance and the NIS of the last successful measurement update.
+  const Diagnostics& lastUpdate() const { return diagnostics_; }
+  /// True when the sigma points of the last time update are still the filter's.
+  bool hasPropagatedPoints() const { return hasPropagatedPoints_; }
+  const Model& model() const { return model_; }
+  const Integrator& integrator() const { return integrator_; }
+  const Settings& settings() const { return settings_; }
+
+ private:
+  template <class InputSource>
+  Status timeUpdateWith(const InputSource& input, Scalar t, Scalar h, int steps) {
+    if (const Status s = detail::checkStep(t, h, steps); s != Status::Ok) return s;
+    if (const Status s = core_.draw(state_, covariance_); s != Status::Ok) return s;
+    auto& points = core_.workPoints();
+    for (int i = 0; i < SigmaPointCount; ++i)  // χᵢ⁺ = Φ_h(χᵢ; t, θ)
+      points.col(i) = detail::propagate(model_, integrator_, input, parameters_, t, h, steps, points.col(i));
+    if (!points.allFinite()) return Status::NonFiniteResult;
+    core_.predict(settings_.processNoise, candidateState_, candidateCovariance_);
+    if (!candidateState_.allFinite() || !candidateCovariance_.allFinite()) return Status::NonFiniteResult;
+    core_.commitPoints();
+    state_ = candidateState_;
+    covariance_ = candidateCovariance_;
+    hasPropagatedPoints_ = true;
+    return Status::Ok;
+  }
+
+  template <class InputSource>
+  Status propagateMeanWith(const InputSource& input, Scalar t, Scalar h, int steps) {
+    if (const Status s = detail::checkStep(t, h, steps); s != Status::Ok) return s;
+    candidateState_ = detail::propagate(model_, integrator_, input, parameters_, t, h, steps, state_);
+    if (!candidateState_.allFinite()) return Status::NonFiniteResult;
+    state_ = candidateState_;
+    hasPropagatedPoints_ = false;
+    return Status::Ok;
+  }
+
+  Model model_;
+  Integrator integrator_;
+  Settings settings_;
+  detail::UnscentedCore<Scalar, StateDim, MeasDim> core_;
+  State state_;
+  StateMatrix covariance_;
+  Param parameters_;
+  Diagnostics diagnostics_;
+  bool hasPropagatedPoints_ = false;
+  // Workspace: results are computed here and committed only when the whole step succeeded.
+  State candidateState_;
+  StateMatrix candidateCovariance_;
+  Diagnostics candidateDiagnostics_;
+};
+
+}  // namespace mjukf
