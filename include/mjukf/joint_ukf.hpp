@@ -28,6 +28,10 @@ struct JointUkfSettings {
   AugmentedMatrix initialCovariance = AugmentedMatrix::Zero();  ///< P₀ of [x; θ], symmetric positive definite
   AugmentedMatrix processNoise = AugmentedMatrix::Zero();       ///< Q of [x; θ], positive semi-definite
   MeasMatrix measurementNoise = MeasMatrix::Zero();             ///< R, symmetric positive definite
+  /// false (the paper's Algorithm 1): the measurement update reuses the propagated sigma points, so
+  /// P_xy and P_yy leave Q out. true: it draws new points from (x̂⁻, P⁻), which costs one more
+  /// Cholesky factorisation and makes the filter the textbook Kalman filter on linear models.
+  bool redrawPointsForUpdate = false;
 };
 
 /// Joint unscented Kalman filter: estimates z = [x; θ] with L = n + p, the parameters constant in the
@@ -73,13 +77,14 @@ class JointUkf : public detail::TimeStepping<JointUkf<Model_, Integrator_>, Mode
   }
 
   /// Measurement update, algorithms.md §3 on the augmented vector, g(z) = g(x, θ). Uses the sigma
-  /// points of the last time update as they are; if the filter has none, it draws them from the
-  /// current mean and covariance.
+  /// points of the last time update as they are (see `redrawPointsForUpdate`); if the filter has none,
+  /// it draws them from the current mean and covariance.
   Status measurementUpdate(const Meas& y) {
     if (!y.allFinite()) return Status::NonFiniteMeasurement;
-    if (!hasPropagatedPoints_)
+    const bool drawPoints = settings_.redrawPointsForUpdate || !hasPropagatedPoints_;
+    if (drawPoints)
       if (const Status s = core_.draw(augmented_, covariance_); s != Status::Ok) return s;
-    const auto& points = hasPropagatedPoints_ ? core_.points() : core_.workPoints();
+    const auto& points = drawPoints ? core_.workPoints() : core_.points();
     for (int i = 0; i < SigmaPointCount; ++i)  // Yᵢ = g(xᵢ, θᵢ) of zᵢ = [xᵢ; θᵢ]
       core_.measuredPoints().col(i) = model_.measurement(points.col(i).template head<StateDim>(),
                                                          points.col(i).template tail<ParamDim>());

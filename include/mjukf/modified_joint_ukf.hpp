@@ -32,6 +32,10 @@ struct ModifiedJointUkfSettings {
   StateMatrix initialCovariance = StateMatrix::Zero();    ///< P₀ of x, symmetric positive definite
   StateMatrix processNoise = StateMatrix::Zero();         ///< Q of x, symmetric positive semi-definite
   MeasMatrix measurementNoise = MeasMatrix::Zero();       ///< R, symmetric positive definite
+  /// false (the paper's Algorithm 1): the measurement update reuses the propagated sigma points, so
+  /// P_xy and P_yy leave Q out. true: it draws new points from (x̂⁻, P⁻), which costs one more
+  /// Cholesky factorisation and makes the filter the textbook Kalman filter on linear models.
+  bool redrawPointsForUpdate = false;
   /// ξ, the scaling parameter of eq. 9. Its sign follows the sign of ∂y/∂θ; too large diverges,
   /// too small converges slowly.
   Scalar scaling = 0;
@@ -103,13 +107,14 @@ class ModifiedJointUkf : public detail::TimeStepping<ModifiedJointUkf<Model_, In
   ///     θᵢ ← θ̂ − ξ T (y − Yᵢ),   θ̂ ← (1 / (2n + 1)) Σ θᵢ
   ///
   /// with Yᵢ = g(χᵢ⁺, θᵢ) and θ̂ the estimate before this update. Uses the sigma points of the last
-  /// time update as they are; if the filter has none, it draws them from the current mean and
-  /// covariance, paired with the θᵢ in order.
+  /// time update as they are (see `redrawPointsForUpdate`); if the filter has none, it draws them from
+  /// the current mean and covariance, paired with the θᵢ in order.
   Status measurementUpdate(const Meas& y) {
     if (!y.allFinite()) return Status::NonFiniteMeasurement;
-    if (!hasPropagatedPoints_)
+    const bool drawPoints = settings_.redrawPointsForUpdate || !hasPropagatedPoints_;
+    if (drawPoints)
       if (const Status s = core_.draw(state_, covariance_); s != Status::Ok) return s;
-    const auto& points = hasPropagatedPoints_ ? core_.points() : core_.workPoints();
+    const auto& points = drawPoints ? core_.workPoints() : core_.points();
     auto& measured = core_.measuredPoints();
     for (int i = 0; i < SigmaPointCount; ++i)  // Yᵢ = g(χᵢ⁺, θᵢ)
       measured.col(i) = model_.measurement(points.col(i), parameterPoints_.col(i));

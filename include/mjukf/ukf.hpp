@@ -27,6 +27,10 @@ struct UkfSettings {
   StateMatrix initialCovariance = StateMatrix::Zero();    ///< P₀, symmetric positive definite
   StateMatrix processNoise = StateMatrix::Zero();         ///< Q, symmetric positive semi-definite
   MeasMatrix measurementNoise = MeasMatrix::Zero();       ///< R, symmetric positive definite
+  /// false (the paper's Algorithm 1): the measurement update reuses the propagated sigma points, so
+  /// P_xy and P_yy leave Q out. true: it draws new points from (x̂⁻, P⁻), which costs one more
+  /// Cholesky factorisation and makes the filter the textbook Kalman filter on linear models.
+  bool redrawPointsForUpdate = false;
 };
 
 /// Unscented Kalman filter of the state of `Model`, whose parameters are known and fixed.
@@ -69,15 +73,16 @@ class Ukf : public detail::TimeStepping<Ukf<Model_, Integrator_>, Model_> {
   }
 
   /// Measurement update, algorithms.md §3 (Algorithm 1 of the paper). Uses the sigma points of the
-  /// last time update as they are; if the filter has none (no time update since the last update or
-  /// open-loop propagation), it draws them from the current mean and covariance.
+  /// last time update as they are (see `redrawPointsForUpdate`); if the filter has none (no time update
+  /// since the last update or open-loop propagation), it draws them from the current mean and covariance.
   Status measurementUpdate(const Meas& y) {
     if (!y.allFinite()) return Status::NonFiniteMeasurement;
     // The points of the last time update, or, when there are none, points drawn from the current
     // mean and covariance into the workspace.
-    if (!hasPropagatedPoints_)
+    const bool drawPoints = settings_.redrawPointsForUpdate || !hasPropagatedPoints_;
+    if (drawPoints)
       if (const Status s = core_.draw(state_, covariance_); s != Status::Ok) return s;
-    const auto& points = hasPropagatedPoints_ ? core_.points() : core_.workPoints();
+    const auto& points = drawPoints ? core_.workPoints() : core_.points();
     for (int i = 0; i < SigmaPointCount; ++i)
       core_.measuredPoints().col(i) = model_.measurement(points.col(i), parameters_);  // Yᵢ = g(χᵢ⁺)
     if (const Status s = core_.correct(points, state_, covariance_, y, settings_.measurementNoise,

@@ -1,0 +1,63 @@
+#pragma once
+
+// Models, steppers and helpers shared by the core tests.
+
+#include <random>
+
+#include <Eigen/Core>
+
+#include "mjukf/integrators/i_tr_bdf2.hpp"
+
+namespace mjukf::testing {
+
+/// ẋ = A x + B u(t), y = C x: a damped, coupled linear system with u(t) = sin t. The parameter vector
+/// is empty; MeasDim < 3 observes the state partially.
+template <int MeasDim_>
+struct LinearModel {
+  using Scalar = double;
+  static constexpr int StateDim = 3, ParamDim = 0, MeasDim = MeasDim_, InputDim = 1;
+  using State = Eigen::Matrix<double, StateDim, 1>;
+  using Param = Eigen::Matrix<double, ParamDim, 1>;
+  using Meas = Eigen::Matrix<double, MeasDim, 1>;
+  using Input = Eigen::Matrix<double, InputDim, 1>;
+
+  Eigen::Matrix3d A = (Eigen::Matrix3d() << -0.5, 1.0, 0.0,  //
+                       -1.0, -0.2, 0.3,                          //
+                       0.2, 0.0, -0.8)
+                          .finished();
+  Eigen::Vector3d B = Eigen::Vector3d(0.0, 1.0, 0.5);
+  Eigen::Matrix<double, MeasDim, StateDim> C = Eigen::Matrix<double, MeasDim, StateDim>::Identity();
+
+  Input input(double t) const { return Input::Constant(std::sin(t)); }
+  State derivative(double, const State& x, const Input& u, const Param&) const { return A * x + B * u(0); }
+  Meas measurement(const State& x, const Param&) const { return C * x; }
+};
+
+/// A stepper that counts its steps (one step = one model propagation of a point), through a pointer
+/// so the count survives the copy a filter keeps.
+template <class Inner>
+struct CountingStepper {
+  using Scalar = typename Inner::Scalar;
+  static constexpr int order = Inner::order;
+  static constexpr int evaluationsPerStep = Inner::evaluationsPerStep;
+  Inner inner;
+  long* steps = nullptr;
+
+  template <class F, class State>
+  State step(F&& f, Scalar t, const State& x, Scalar h) const {
+    ++*steps;
+    return inner.step(f, t, x, h);
+  }
+};
+
+/// A random symmetric positive definite matrix with correlations, condition number moderate.
+template <int N>
+Eigen::Matrix<double, N, N> randomCovariance(std::mt19937_64& rng, double scale = 1.0) {
+  std::normal_distribution<double> normal;
+  Eigen::Matrix<double, N, N> factor;
+  for (int r = 0; r < N; ++r)
+    for (int c = 0; c < N; ++c) factor(r, c) = normal(rng);
+  return scale * (factor * factor.transpose() + 0.1 * Eigen::Matrix<double, N, N>::Identity());
+}
+
+}  // namespace mjukf::testing
