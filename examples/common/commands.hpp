@@ -1,0 +1,175 @@
+#pragma once
+
+// The `simulate` and `estimate` subcommands, written once for any plant description (plant.hpp).
+
+#include <cstdio>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "common/cli.hpp"
+#include "common/estimation.hpp"
+#include "common/plant.hpp"
+#include "common/simulation.hpp"
+
+namespace mjukf::examples {
+
+/// simulate --out FILE [--duration S] [--seed N] [--snr-db DB] [--change-at T]
+template <class Plant>
+int simulateCommand(const std::vector<std::string>& words) {
+  using Experiment = typename Plant::Experiment;
+  using Model = typename Experiment::Model;
+  const Arguments args(words, {"--out", "--duration", "--seed", "--snr-db", "--change-at"});
+  const std::string out = args.requiredText("--out");
+
+  SimulationOptions<Model> options;
+  options.stepSize = Experiment::stepSize;
+  options.duration = Experiment::duration;
+  if (args.has("--change-at")) {
+    const auto change = Plant::parameterChange();
+    if (!change) throw UsageError(std::string(Plant::title) + " has no parameter-change scenario: drop --change-at");
+    options.parameters.after = change->after;
+    options.parameters.changeAt = args.number("--change-at", change->at);
+    if (!(options.parameters.changeAt >= 0)) throw UsageError("--change-at needs a time >= 0");
+    options.duration = change->duration;
+  }
+  options.duration = args.number("--duration", options.duration);
+  if (!(options.duration >= 0)) throw UsageError("--duration needs a time >= 0");
+  options.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0));
+  options.snrDb = args.number("--snr-db", 30, /*allowInfinity=*/true);
+
+  const auto data = simulatePlant(Model(), options);
+  writePlantData(out, data);
+  std::printf("simulated %s: %ld rows (%.6g s at h = %g s), SNR %g dB, seed %llu -> %s\n", Plant::title,
+              data.rows(), options.duration, options.stepSize, options.snrDb,
+              static_cast<unsigned long long>(options.seed), out.c_str());
+  return kExitOk;
+}
+
+namespace detail {
+
+inline FilterKind parseFilterKind(const std::string& name) {
+  if (name == "ukf") return FilterKind::Ukf;
+  if (name == "jukf") return FilterKind::JointUkf;
+  if (name == "mjukf") return FilterKind::ModifiedJointUkf;
+  throw UsageError("--filter must be ukf, jukf or mjukf, not '" + name + "'");
+}
+
+// A diagonal from one number (every entry) or a comma-separated list of all the entries.
+template <class Matrix>
+void overrideDiagonal(const Arguments& args, const std::string& flag, Matrix& matrix) {
+  if (!args.has(flag)) return;
+  const auto size = static_cast<std::size_t>(matrix.rows());
+  const bool list = args.text(flag).find(',') != std::string::npos;
+  const std::vector<double> values = args.numbers(flag, list ? size : 1);
+  matrix.setZero();
+  for (std::size_t i = 0; i < size; ++i) matrix(long(i), long(i)) = values[list ? i : 0];
+}
+
+template <class Vector>
+void overrideVector(const Arguments& args, const std::string& flag, Vector& vector) {
+  if (!args.has(flag)) return;
+  const std::vector<double> values = args.numbers(flag, static_cast<std::size_t>(vector.size()));
+  for (std::size_t i = 0; i < values.size(); ++i) vector(long(i)) = values[i];
+}
+
+// Flags that only make sense for some filters are refused for the others rather than ignored.
+inline void requireFilter(const Arguments& args, const std::string& flag, bool applies, const char* which) {
+  if (args.has(flag) && !applies) throw UsageError("flag " + flag + " applies to " + which + " only");
+}
+
+// The paper's settings for the chosen filter, with every flag given applied on top.
+template <class Experiment>
+FilterSetup<Experiment> filterSetup(const Arguments& args) {
+  auto setup = FilterSetup<Experiment>::paper(parseFilterKind(args.requiredText("--filter")));
+  const bool ukf = setup.kind == FilterKind::Ukf;
+  const bool jukf = setup.kind == FilterKind::JointUkf;
+  const bool mjukf = setup.kind == FilterKind::ModifiedJointUkf;
+  requireFilter(args, "--xi", mjukf, "mjukf");
+  requireFilter(args, "--transform", mjukf, "mjukf");
+  requireFilter(args, "--p-theta", mjukf, "mjukf");
+
+  setup.measurementEvery = static_cast<int>(args.integer("--every", setup.measurementEvery, 1));
+  overrideVector(args, "--x0", setup.initialState);
+  overrideVector(args, "--theta0", setup.initialParameters);
+  for (auto* sigma : {&setup.ukf.sigmaPoints, &setup.jointUkf.sigmaPoints, &setup.modifiedJointUkf.sigmaPoints}) {
+    sigma->alpha = args.number("--alpha", sigma->alpha);
+    sigma->beta = args.number("--beta", sigma->beta);
+    sigma->kappa = args.number("--kappa", sigma->kappa);
+  }
+  if (ukf) {
+    overrideDiagonal(args, "--p0", setup.ukf.initialCovariance);
+    overrideDiagonal(args, "--q", setup.ukf.processNoise);
+    overrideDiagonal(args, "--r", setup.ukf.measurementNoise);
+  } else if (jukf) {
+    overrideDiagonal(args, "--p0", setup.jointUkf.initialCovariance);
+    overrideDiagonal(args, "--q", setup.jointUkf.processNoise);
+    overrideDiagonal(args, "--r", setup.jointUkf.measurementNoise);
+  } else {
+    auto& s = setup.modifiedJointUkf;
+    overrideDiagonal(args, "--p0", s.initialCovariance);
+    overrideDiagonal(args, "--q", s.processNoise);
+    overrideDiagonal(args, "--r", s.measurementNoise);
+    s.scaling = args.number("--xi", s.scaling);
+    overrideVector(args, "--p-theta", s.parameterSpread);
+    if (args.has("--transform")) {
+      const auto values = args.numbers("--transform", static_cast<std::size_t>(s.transformation.size()));
+      for (long i = 0; i < s.transformation.rows(); ++i)  // row-major, as T is written
+        for (long j = 0; j < s.transformation.cols(); ++j)
+          s.transformation(i, j) = values[static_cast<std::size_t>(i * s.transformation.cols() + j)];
+    }
+  }
+  return setup;
+}
+
+}  // namespace detail
+
+/// estimate --filter ukf|jukf|mjukf --data FILE --out FILE [--xi X] [--every N] [more settings]
+template <class Plant>
+int estimateCommand(const std::vector<std::string>& words) {
+  using Experiment = typename Plant::Experiment;
+  using Model = typename Experiment::Model;
+  const Arguments args(words, {"--filter", "--data", "--out", "--xi", "--every", "--step", "--rmse-from", "--x0",
+                               "--theta0", "--alpha", "--beta", "--kappa", "--p0", "--q", "--r", "--p-theta",
+                               "--transform"});
+  const auto setup = detail::filterSetup<Experiment>(args);
+  const std::string dataPath = args.requiredText("--data");
+  const std::string out = args.requiredText("--out");
+  const double h = args.number("--step", Experiment::stepSize);
+  if (!(h > 0)) throw UsageError("--step needs a positive step size");
+  const long rmseFrom = args.integer("--rmse-from", Experiment::rmseFromRow, 0);
+
+  const auto data = loadPlantData<Model>(dataPath, h, Model::trueParameters());
+  EstimateRun<Model> run;
+  try {
+    run = runFilter(Model(), setup, data);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("bad filter setting: ") + e.what());
+  }
+  writeEstimates(out, run, h);
+
+  std::printf("%s on %s: %ld rows, h = %g s, a measurement every %d steps\n", filterName(setup.kind),
+              dataPath.c_str(), data.rows(), h, setup.measurementEvery);
+  if (run.outcome.status != Status::Ok) {
+    std::printf("error: the filter refused the step to row %ld (t = %g s): %s; %s holds rows 0-%ld only\n",
+                run.outcome.row, double(run.outcome.row) * h, toString(run.outcome.status), out.c_str(),
+                run.outcome.row - 1);
+    return kExitFailure;
+  }
+  // Short runs have no rows past the paper's start of the RMSE window: take all of them, and say so.
+  const long from = rmseFrom < data.rows() ? rmseFrom : 0;
+  std::printf("parameter RMSE over rows >= %ld (t >= %g s)%s, truth: %s\n", from, double(from) * h,
+              from != rmseFrom ? " (the run is shorter than --rmse-from)" : "",
+              data.parameterTruthFromFile ? "theta*_true columns" : "the plant's true constants");
+  const auto rmse = parameterRmse(run, data, from);
+  const auto& last = run.parameters.back();
+  for (int i = 0; i < Model::ParamDim; ++i)
+    std::printf("rmse_theta%d: %.10g  # %s (%s), final estimate %.6g, truth %.6g%s\n", i + 1, rmse(i),
+                Plant::parameters[std::size_t(i)].name, Plant::parameters[std::size_t(i)].unit, last(i),
+                data.parameterTruth.back()(i), setup.kind == FilterKind::Ukf ? " (fixed: ukf estimates no parameters)" : "");
+  std::printf("loop_seconds: %.6g\n", run.loopSeconds);
+  std::printf("wrote %s\n", out.c_str());
+  return kExitOk;
+}
+
+}  // namespace mjukf::examples

@@ -1,0 +1,133 @@
+#pragma once
+
+// One filter run over a data set with the paper's schedule (algorithms.md §7): which filter, its
+// settings (the paper's by default, experiments.md), and the estimates of every row.
+
+#include <chrono>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "common/plant_data.hpp"
+#include "mjukf/joint_ukf.hpp"
+#include "mjukf/modified_joint_ukf.hpp"
+#include "mjukf/paper_schedule.hpp"
+#include "mjukf/ukf.hpp"
+
+namespace mjukf::examples {
+
+enum class FilterKind { Ukf, JointUkf, ModifiedJointUkf };
+
+inline const char* filterName(FilterKind kind) {
+  switch (kind) {
+    case FilterKind::Ukf: return "ukf";
+    case FilterKind::JointUkf: return "jukf";
+    case FilterKind::ModifiedJointUkf: return "mjukf";
+  }
+  return "?";
+}
+
+/// Everything that defines a run; `paper(kind)` gives the paper's settings for `Experiment`.
+template <class Experiment>
+struct FilterSetup {
+  using Model = typename Experiment::Model;
+  FilterKind kind = FilterKind::ModifiedJointUkf;
+  int measurementEvery = Experiment::measurementEvery;
+  typename Model::State initialState = Experiment::initialState();
+  /// θ̂₀ of the joint filters; the fixed parameters of the UKF, which estimates none (the truth).
+  typename Model::Param initialParameters = Experiment::initialParameters();
+  UkfSettings<Model> ukf = Experiment::ukf();
+  JointUkfSettings<Model> jointUkf = Experiment::jointUkf();
+  ModifiedJointUkfSettings<Model> modifiedJointUkf = Experiment::modifiedJointUkf();
+
+  static FilterSetup paper(FilterKind kind) {
+    FilterSetup setup;
+    setup.kind = kind;
+    if (kind == FilterKind::Ukf) setup.initialParameters = Model::trueParameters();
+    return setup;
+  }
+};
+
+/// The estimate of every row, and how the run went.
+template <class Model>
+struct EstimateRun {
+  std::vector<typename Model::State> state;
+  std::vector<typename Model::Param> parameters;
+  ScheduleOutcome outcome;
+  double loopSeconds = 0;  ///< wall time of the schedule loop alone
+};
+
+namespace detail {
+
+template <class Filter, class Model>
+EstimateRun<Model> runSchedule(Filter& filter, const PlantData<Model>& data, int measurementEvery) {
+  EstimateRun<Model> run;
+  run.state.resize(data.y.size());
+  run.parameters.resize(data.y.size());
+  const auto start = std::chrono::steady_clock::now();
+  run.outcome = runPaperSchedule(
+      filter, data.rows(), data.stepSize, measurementEvery,
+      [&](long k) -> const typename Model::Meas& { return data.y[static_cast<std::size_t>(k)]; },
+      [&](long k, const Filter& f) {
+        run.state[static_cast<std::size_t>(k)] = f.state();
+        run.parameters[static_cast<std::size_t>(k)] = f.parameters();
+      });
+  run.loopSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (run.outcome.status != Status::Ok) {  // keep only the rows that were estimated
+    run.state.resize(static_cast<std::size_t>(run.outcome.row));
+    run.parameters.resize(static_cast<std::size_t>(run.outcome.row));
+  }
+  return run;
+}
+
+}  // namespace detail
+
+/// Runs the filter of `setup` over `data`. Throws std::invalid_argument (naming the setting) when the
+/// settings are invalid.
+template <class Experiment>
+EstimateRun<typename Experiment::Model> runFilter(const typename Experiment::Model& model,
+                                                  const FilterSetup<Experiment>& setup,
+                                                  const PlantData<typename Experiment::Model>& data) {
+  using Model = typename Experiment::Model;
+  switch (setup.kind) {
+    case FilterKind::Ukf: {
+      Ukf<Model> filter(model, setup.initialState, setup.initialParameters, setup.ukf);
+      return detail::runSchedule(filter, data, setup.measurementEvery);
+    }
+    case FilterKind::JointUkf: {
+      JointUkf<Model> filter(model, setup.initialState, setup.initialParameters, setup.jointUkf);
+      return detail::runSchedule(filter, data, setup.measurementEvery);
+    }
+    case FilterKind::ModifiedJointUkf: {
+      ModifiedJointUkf<Model> filter(model, setup.initialState, setup.initialParameters, setup.modifiedJointUkf);
+      return detail::runSchedule(filter, data, setup.measurementEvery);
+    }
+  }
+  throw std::logic_error("unknown filter kind");
+}
+
+/// RMSE of each parameter over rows `fromRow` … (eq. 16), against the data's parameter truth.
+template <class Model>
+typename Model::Param parameterRmse(const EstimateRun<Model>& run, const PlantData<Model>& data, long fromRow) {
+  RmseAccumulator<typename Model::Scalar, Model::ParamDim> rmse;
+  for (long k = fromRow; k < static_cast<long>(run.parameters.size()); ++k)
+    rmse.add(run.parameters[static_cast<std::size_t>(k)], data.parameterTruth[static_cast<std::size_t>(k)]);
+  return rmse.value();
+}
+
+/// Writes the estimates as t, x1…xn, theta1…thetap, one row per data row.
+template <class Model>
+void writeEstimates(const std::string& path, const EstimateRun<Model>& run, double h) {
+  std::vector<std::string> header{"t"};
+  for (const auto& names : {numberedNames("x", Model::StateDim), numberedNames("theta", Model::ParamDim)})
+    header.insert(header.end(), names.begin(), names.end());
+  CsvWriter out(path, header);
+  for (std::size_t k = 0; k < run.state.size(); ++k) {
+    out << static_cast<double>(k) * h;
+    out.fields(run.state[k]).fields(run.parameters[k]);
+    out.endRow();
+  }
+  out.close();
+}
+
+}  // namespace mjukf::examples

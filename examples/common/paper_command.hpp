@@ -1,0 +1,285 @@
+#pragma once
+
+// The `paper` subcommand: JUKF and MJUKF with the paper's settings on one data set, the analogue of
+// the paper's Table 3 / Table 4 next to the published values, and figures like the paper's; for a
+// plant with a parameter-change scenario also that scenario (the robot's Figs. 12–14).
+
+#include <algorithm>
+#include <cstdarg>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <optional>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <system_error>
+#include <vector>
+
+#include "common/cli.hpp"
+#include "common/estimation.hpp"
+#include "common/plant.hpp"
+#include "common/plot.hpp"
+#include "common/simulation.hpp"
+
+namespace mjukf::examples {
+
+namespace detail {
+
+// printf into a string, for the tables that go both to the console and to table.txt.
+inline std::string format(const char* pattern, ...) {
+  char buffer[512];
+  va_list args;
+  va_start(args, pattern);
+  std::vsnprintf(buffer, sizeof buffer, pattern, args);
+  va_end(args);
+  return buffer;
+}
+
+inline double median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+template <class Model>
+struct Comparison {
+  EstimateRun<Model> jointUkf;
+  EstimateRun<Model> modifiedJointUkf;
+  double jointUkfSeconds = 0;  // median loop time
+  double modifiedJointUkfSeconds = 0;
+};
+
+// Runs both filters `runs` times, alternating so that a slow spell of the machine hits both alike.
+template <class Experiment>
+Comparison<typename Experiment::Model> compareFilters(const PlantData<typename Experiment::Model>& data,
+                                                      const FilterSetup<Experiment>& jointUkf,
+                                                      const FilterSetup<Experiment>& modifiedJointUkf, long runs) {
+  using Model = typename Experiment::Model;
+  Comparison<Model> result;
+  std::vector<double> jointTimes, modifiedTimes;
+  for (long r = 0; r < runs; ++r) {
+    result.jointUkf = runFilter(Model(), jointUkf, data);
+    result.modifiedJointUkf = runFilter(Model(), modifiedJointUkf, data);
+    for (const auto* run : {&result.jointUkf, &result.modifiedJointUkf})
+      if (run->outcome.status != Status::Ok)
+        throw std::runtime_error(std::string(run == &result.jointUkf ? "JUKF" : "MJUKF") +
+                                 " refused the step to row " + std::to_string(run->outcome.row) + ": " +
+                                 toString(run->outcome.status));
+    jointTimes.push_back(result.jointUkf.loopSeconds);
+    modifiedTimes.push_back(result.modifiedJointUkf.loopSeconds);
+  }
+  result.jointUkfSeconds = median(jointTimes);
+  result.modifiedJointUkfSeconds = median(modifiedTimes);
+  return result;
+}
+
+// Column numbers (1-based) in the files the figures read.
+template <class Model>
+int dataParameterColumn(const PlantData<Model>& data, int i) {
+  return 2 + Model::MeasDim + (data.stateTruth.empty() ? 0 : Model::StateDim) + i;
+}
+inline int estimateStateColumn(int i) { return 2 + i; }
+template <class Model>
+int estimateParameterColumn(int i) {
+  return 2 + Model::StateDim + i;
+}
+
+inline std::string withUnit(const Quantity& q) { return std::string(q.label) + " (" + q.unit + ")"; }
+
+// Parameter estimates of both filters against the truth, one panel per parameter.
+template <class Plant, class Model>
+Figure parameterFigure(const std::string& png, const std::string& title, const std::string& dataFile,
+                       const PlantData<Model>& data, const std::string& jointFile, const std::string& modifiedFile) {
+  Figure figure{png, title, Model::ParamDim, 1, 1000, 380 * Model::ParamDim, {}};
+  const int every = std::max(1, static_cast<int>(data.rows() / 4000));
+  for (int i = 0; i < Model::ParamDim; ++i) {
+    const Quantity& q = Plant::parameters[std::size_t(i)];
+    figure.panels.push_back(
+        {std::string(q.label) + " estimates", "time t (s)", withUnit(q),
+         {{dataFile, 1, dataParameterColumn(data, i), "truth", "lines lw 2 dt 2 lc rgb 'black'", every},
+          {jointFile, 1, estimateParameterColumn<Model>(i), "JUKF", "lines lw 1.5 lc rgb '#1f77b4'", every},
+          {modifiedFile, 1, estimateParameterColumn<Model>(i), "MJUKF", "lines lw 1.5 lc rgb '#d62728'", every}}});
+  }
+  return figure;
+}
+
+// State estimates of both filters against the measurements, one panel per state.
+template <class Plant, class Model>
+Figure stateFigure(const std::string& png, const std::string& title, const std::string& dataFile,
+                   const PlantData<Model>& data, const std::string& jointFile, const std::string& modifiedFile) {
+  const int columns = Model::StateDim > 2 ? 2 : 1;
+  const int rows = (Model::StateDim + columns - 1) / columns;
+  Figure figure{png, title, rows, columns, columns == 2 ? 1400 : 1000, 380 * rows, {}};
+  const int every = std::max(1, static_cast<int>(data.rows() / 4000));
+  const int measurementEvery = std::max(1, static_cast<int>(data.rows() / 2000));
+  for (int i = 0; i < Model::StateDim; ++i) {
+    const Quantity& q = Plant::states[std::size_t(i)];
+    figure.panels.push_back(
+        {q.label, "time t (s)", withUnit(q),
+         {{dataFile, 1, 2 + i, "measurement", "points pt 7 ps 0.3 lc rgb '#a0a0a0'", measurementEvery},
+          {jointFile, 1, estimateStateColumn(i), "JUKF", "lines lw 1.5 lc rgb '#1f77b4'", every},
+          {modifiedFile, 1, estimateStateColumn(i), "MJUKF", "lines lw 1.5 lc rgb '#d62728'", every}}});
+  }
+  return figure;
+}
+
+// Loads `path`, or simulates `duration` seconds when it is empty.
+template <class Plant>
+PlantData<typename Plant::Experiment::Model> paperData(const std::string& path, double duration,
+                                                       std::uint64_t seed,
+                                                       const TrueParameters<typename Plant::Experiment::Model::Param>& truth,
+                                                       std::string& description) {
+  using Model = typename Plant::Experiment::Model;
+  const double h = Plant::Experiment::stepSize;
+  if (!path.empty()) {
+    auto data = loadPlantData<Model>(path, h, truth.before);
+    if (!data.parameterTruthFromFile)
+      for (long k = 0; k < data.rows(); ++k) data.parameterTruth[std::size_t(k)] = truth.atRow(k, h);
+    description = path;
+    return data;
+  }
+  SimulationOptions<Model> options;
+  options.stepSize = h;
+  options.duration = duration;
+  options.seed = seed;
+  options.parameters = truth;
+  description = format("fresh simulation (%g s, seed %llu, 30 dB SNR)", duration, static_cast<unsigned long long>(seed));
+  return simulatePlant(Model(), options);
+}
+
+}  // namespace detail
+
+/// paper [--data FILE] [--out-dir DIR] [--change-data FILE] [--runs N] [--duration S] [--seed N]
+template <class Plant>
+int paperCommand(const std::vector<std::string>& words) {
+  using Experiment = typename Plant::Experiment;
+  using Model = typename Experiment::Model;
+  using detail::format;
+  namespace fs = std::filesystem;
+  const auto change = Plant::parameterChange();
+  std::set<std::string> known{"--data", "--out-dir", "--runs", "--duration", "--seed"};
+  if (change) known.insert("--change-data");
+  const Arguments args(words, known);
+  const std::string outDir = args.text("--out-dir", std::string("paper_") + Plant::slug);
+  const long runs = args.integer("--runs", 20, 1);
+  const auto seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0));
+  const double duration = args.number("--duration", Experiment::duration);
+  if (!(duration > 0)) throw UsageError("--duration needs a positive time");
+  std::error_code error;
+  fs::create_directories(outDir, error);
+  if (error) throw OutputError(outDir + ": cannot create the directory: " + error.message());
+  const auto path = [&](const std::string& name) { return (fs::path(outDir) / (std::string(Plant::slug) + "_" + name)).string(); };
+  Plotter plotter;
+  std::vector<std::string> written;
+  std::string report;
+  const auto say = [&](const std::string& line) {
+    std::cout << line << "\n";
+    report += line + "\n";
+  };
+
+  // The paper's table: JUKF and MJUKF, the paper's settings, on one data set.
+  std::string description;
+  const auto data = detail::paperData<Plant>(args.text("--data"), duration, seed, {Model::trueParameters()}, description);
+  const auto jointSetup = FilterSetup<Experiment>::paper(FilterKind::JointUkf);
+  const auto modifiedSetup = FilterSetup<Experiment>::paper(FilterKind::ModifiedJointUkf);
+  const auto result = detail::compareFilters(data, jointSetup, modifiedSetup, runs);
+  const long from = Experiment::rmseFromRow < data.rows() ? Experiment::rmseFromRow : 0;
+  const auto jointRmse = parameterRmse(result.jointUkf, data, from);
+  const auto modifiedRmse = parameterRmse(result.modifiedJointUkf, data, from);
+
+  const auto& paper = Plant::published;
+  const auto& reference = Plant::reference;
+  say(format("%s: analogue of the paper's %s", Plant::title, Plant::table));
+  say(format("data: %s, %ld rows; RMSE over t >= %g s; time: median of %ld runs of the estimation loop",
+             description.c_str(), data.rows(), double(from) * Experiment::stepSize, runs));
+  say("");
+  say(format("%-26s %-24s %-24s", "", "this library (C++)", (std::string("paper ") + Plant::table).c_str()));
+  say(format("%-26s %-11s %-12s %-11s %-12s", "", "JUKF", "MJUKF", "JUKF", "MJUKF"));
+  for (int i = 0; i < Model::ParamDim; ++i) {
+    const Quantity& q = Plant::parameters[std::size_t(i)];
+    say(format("%-26s %-11.7f %-12.7f %-11.5g %-12.5g", ("RMSE " + std::string(q.name) + " (" + q.unit + ")").c_str(),
+               jointRmse(i), modifiedRmse(i), paper.jukfRmse[std::size_t(i)], paper.mjukfRmse[std::size_t(i)]));
+  }
+  say(format("%-26s %-11.4g %-12.4g %-11.5g %-12.5g", "time (s)", result.jointUkfSeconds,
+             result.modifiedJointUkfSeconds, paper.jukfSeconds, paper.mjukfSeconds));
+  say(format("%-26s %-24.3f %-24.3f", "time MJUKF / JUKF", result.modifiedJointUkfSeconds / result.jointUkfSeconds,
+             paper.mjukfSeconds / paper.jukfSeconds));
+  say("");
+  std::string conformance = "conformance RMSEs on the reference file (independent implementation): JUKF";
+  for (double v : reference.jukfRmse) conformance += format(" %.10g", v);
+  conformance += ", MJUKF";
+  for (double v : reference.mjukfRmse) conformance += format(" %.10g", v);
+  say(conformance);
+  say(format("reference Python scripts, one run each on a 2-core machine: JUKF %g s, MJUKF %g s (ratio %.3f);",
+             reference.jukfSeconds, reference.mjukfSeconds, reference.mjukfSeconds / reference.jukfSeconds));
+  say(format("  this library is %.0fx (JUKF) and %.0fx (MJUKF) faster than those scripts on this machine",
+             reference.jukfSeconds / result.jointUkfSeconds, reference.mjukfSeconds / result.modifiedJointUkfSeconds));
+
+  const std::string dataFile = path("data.csv"), jointFile = path("jukf.csv"), modifiedFile = path("mjukf.csv");
+  writePlantData(dataFile, data);
+  writeEstimates(jointFile, result.jointUkf, data.stepSize);
+  writeEstimates(modifiedFile, result.modifiedJointUkf, data.stepSize);
+  written.insert(written.end(), {dataFile, jointFile, modifiedFile});
+  const std::string figures[] = {path("parameters.png"), path("states.png")};
+  if (plotter.draw(detail::parameterFigure<Plant>(figures[0], std::string(Plant::title) + ": parameter estimates",
+                                                  dataFile, data, jointFile, modifiedFile)))
+    written.push_back(figures[0]);
+  if (plotter.draw(detail::stateFigure<Plant>(figures[1], std::string(Plant::title) + ": state estimates and measurements",
+                                              dataFile, data, jointFile, modifiedFile)))
+    written.push_back(figures[1]);
+
+  // The parameter-change scenario: the plant changes at `change->at`; MJUKF takes its own ξ.
+  if (change) {
+    TrueParameters<typename Model::Param> truth{Model::trueParameters(), change->after, change->at};
+    const double changeDuration = args.has("--duration") ? duration : change->duration;
+    std::string changeDescription;
+    const auto changeData =
+        detail::paperData<Plant>(args.text("--change-data"), changeDuration, seed, truth, changeDescription);
+    auto changeModified = modifiedSetup;
+    changeModified.modifiedJointUkf.scaling = change->scaling;
+    const auto changeResult = detail::compareFilters(changeData, jointSetup, changeModified, 1);
+    const long changeFrom = Experiment::rmseFromRow < changeData.rows() ? Experiment::rmseFromRow : 0;
+    const auto jr = parameterRmse(changeResult.jointUkf, changeData, changeFrom);
+    const auto mr = parameterRmse(changeResult.modifiedJointUkf, changeData, changeFrom);
+    say("");
+    std::string what;
+    for (int i = 0; i < Model::ParamDim; ++i)
+      what += format("%s%s %g -> %g", i > 0 ? ", " : "", Plant::parameters[std::size_t(i)].name, truth.before(i), truth.after(i));
+    say(format("%s: parameter change (paper Figs. 12-14): %s at t = %g s; MJUKF xi = %g", Plant::title, what.c_str(),
+               change->at, change->scaling));
+    say(format("data: %s, %ld rows; RMSE over t >= %g s against the changing truth", changeDescription.c_str(),
+               changeData.rows(), double(changeFrom) * Experiment::stepSize));
+    say(format("%-26s %-11s %-12s", "", "JUKF", "MJUKF"));
+    for (int i = 0; i < Model::ParamDim; ++i) {
+      const Quantity& q = Plant::parameters[std::size_t(i)];
+      say(format("%-26s %-11.7f %-12.7f", ("RMSE " + std::string(q.name) + " (" + q.unit + ")").c_str(), jr(i), mr(i)));
+      say(format("%-26s %-11.5f %-12.5f", ("final " + std::string(q.name) + format(" (truth %g)", truth.after(i))).c_str(),
+                 changeResult.jointUkf.parameters.back()(i), changeResult.modifiedJointUkf.parameters.back()(i)));
+    }
+    const std::string cData = path("change_data.csv"), cJoint = path("change_jukf.csv"), cModified = path("change_mjukf.csv");
+    writePlantData(cData, changeData);
+    writeEstimates(cJoint, changeResult.jointUkf, changeData.stepSize);
+    writeEstimates(cModified, changeResult.modifiedJointUkf, changeData.stepSize);
+    written.insert(written.end(), {cData, cJoint, cModified});
+    const std::string changeFigures[] = {path("change_parameters.png"), path("change_states.png")};
+    if (plotter.draw(detail::parameterFigure<Plant>(
+            changeFigures[0], std::string(Plant::title) + ": parameter estimates with a parameter change", cData,
+            changeData, cJoint, cModified)))
+      written.push_back(changeFigures[0]);
+    if (plotter.draw(detail::stateFigure<Plant>(changeFigures[1],
+                                                std::string(Plant::title) + ": state estimates with a parameter change",
+                                                cData, changeData, cJoint, cModified)))
+      written.push_back(changeFigures[1]);
+  }
+
+  const std::string tableFile = path("table.txt");
+  std::ofstream(tableFile) << report;
+  written.push_back(tableFile);
+  std::cout << "\nwrote:\n";
+  for (const auto& file : written) std::cout << "  " << file << "\n";
+  return kExitOk;
+}
+
+}  // namespace mjukf::examples

@@ -1,0 +1,50 @@
+#pragma once
+
+// What the example programs need to know about a plant beyond its model: names and units for the
+// CSV summaries and the plots, the paper's published numbers, and the optional parameter-change
+// scenario. Each program defines one such description; everything else is shared.
+//
+// A plant description `Plant` provides:
+//
+//   using Experiment = mjukf::paper::…Experiment<double>;   // model, settings, schedule of the paper
+//   static constexpr const char* program;                   // executable name, for messages
+//   static constexpr const char* title;                     // "Coupled tank"
+//   static constexpr const char* slug;                      // "coupled_tank", for file names
+//   static constexpr const char* table;                     // "Table 3"
+//   static constexpr std::array<Quantity, StateDim> states;
+//   static constexpr std::array<Quantity, ParamDim> parameters;
+//   static constexpr PaperNumbers<ParamDim> published;       // paper's table (Python, HP Z420, mean of 20)
+//   static constexpr PaperNumbers<ParamDim> reference;       // conformance RMSEs; reference scripts' times
+//   static std::optional<ParameterChange<Param>> parameterChange();
+
+#include <array>
+
+namespace mjukf::examples {
+
+/// A named physical quantity: plain name for the console, gnuplot (enhanced-text) label, unit.
+struct Quantity {
+  const char* name;
+  const char* label;
+  const char* unit;
+};
+
+/// RMSE per parameter and run time of JUKF and MJUKF as a table reports them.
+template <int ParamDim>
+struct PaperNumbers {
+  std::array<double, ParamDim> jukfRmse;
+  std::array<double, ParamDim> mjukfRmse;
+  double jukfSeconds;
+  double mjukfSeconds;
+};
+
+/// The paper's parameter-change scenario: from time `at` the plant runs with `after`; the run lasts
+/// `duration`, and MJUKF uses ξ = `scaling`.
+template <class Param>
+struct ParameterChange {
+  double at;
+  double duration;
+  Param after;
+  double scaling;
+};
+
+}  // namespace mjukf::examples

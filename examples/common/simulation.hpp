@@ -1,0 +1,75 @@
+#pragma once
+
+// Simulated measurements as the paper makes them (plants.md): the plant integrated with I-TR-BDF2 at
+// step h from x₀, then white Gaussian noise of one standard deviation for every channel,
+// σ = sqrt(var(all states) / 10^(SNR/10)), the variance taken over every channel and sample together.
+
+#include <cmath>
+#include <cstdint>
+#include <random>
+
+#include "common/plant_data.hpp"
+#include "mjukf/integrators/i_tr_bdf2.hpp"
+
+namespace mjukf::examples {
+
+template <class Model>
+struct SimulationOptions {
+  double duration = 0;  ///< s; rows = round(duration / h) + 1
+  double stepSize = 1e-3;
+  std::uint64_t seed = 1;
+  double snrDb = 30;  ///< +inf for noise-free measurements
+  typename Model::State initialState = Model::State::Zero();
+  TrueParameters<typename Model::Param> parameters{Model::trueParameters()};
+};
+
+/// The noise standard deviation for signal `states` at `snrDb` (plants.md).
+template <class State>
+double noiseStandardDeviation(const std::vector<State>& states, double snrDb) {
+  double sum = 0;
+  double count = 0;
+  for (const auto& x : states) {
+    sum += x.sum();
+    count += double(x.size());
+  }
+  const double mean = sum / count;
+  double squares = 0;
+  for (const auto& x : states) squares += (x.array() - mean).square().sum();
+  return std::sqrt(squares / count / std::pow(10.0, snrDb / 10));
+}
+
+template <class Model>
+PlantData<Model> simulatePlant(const Model& model, const SimulationOptions<Model>& options) {
+  using State = typename Model::State;
+  const double h = options.stepSize;
+  const long rows = std::lround(options.duration / h) + 1;
+  const ITrBdf2<double> integrator;
+
+  PlantData<Model> data;
+  data.stepSize = h;
+  data.parameterTruthFromFile = true;
+  data.stateTruth.resize(static_cast<std::size_t>(rows));
+  data.parameterTruth.resize(static_cast<std::size_t>(rows));
+  data.stateTruth[0] = options.initialState;
+  for (long k = 0; k < rows; ++k) {
+    const auto row = static_cast<std::size_t>(k);
+    data.parameterTruth[row] = options.parameters.atRow(k, h);
+    if (k + 1 == rows) break;
+    // The step from t_k runs with the parameters in force at t_k; the input is evaluated at each stage.
+    const auto& theta = data.parameterTruth[row];
+    const auto rhs = [&](double t, const State& x) -> State { return model.derivative(t, x, model.input(t), theta); };
+    data.stateTruth[row + 1] = integrator.step(rhs, double(k) * h, data.stateTruth[row], h);
+  }
+
+  const double sigma = std::isinf(options.snrDb) ? 0.0 : noiseStandardDeviation(data.stateTruth, options.snrDb);
+  std::mt19937_64 random(options.seed);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  data.y.resize(static_cast<std::size_t>(rows));
+  for (std::size_t k = 0; k < data.y.size(); ++k) {
+    data.y[k] = model.measurement(data.stateTruth[k], data.parameterTruth[k]);
+    for (int c = 0; c < Model::MeasDim; ++c) data.y[k](c) += sigma * noise(random);
+  }
+  return data;
+}
+
+}  // namespace mjukf::examples
