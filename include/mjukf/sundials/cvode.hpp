@@ -29,7 +29,7 @@
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
-namespace mjukf::sundials {
+namespace mjukf {
 
 /// A SUNDIALS call failed; `flag()` is its return code (negative CVODE codes, see `cvode.h`).
 class CvodeError : public std::runtime_error {
@@ -58,7 +58,7 @@ struct CvodeStats {
   long evaluations = 0;  ///< Evaluations of f by CVODE (without its difference-quotient Jacobian).
 };
 
-namespace detail {
+namespace detail::cvode {
 
 struct ContextDeleter {
   void operator()(SUNContext ctx) const { SUNContext_Free(&ctx); }
@@ -80,7 +80,7 @@ inline void check(int flag, const char* call, const std::string& message = std::
   if (flag < 0) {
     // CVodeGetReturnFlagName returns a malloc'ed string the caller frees.
     const std::unique_ptr<char, decltype(&std::free)> name(CVodeGetReturnFlagName(flag), &std::free);
-    std::string what = std::string("mjukf::sundials::Cvode: ") + call + " failed with " +
+    std::string what = std::string("mjukf::Cvode: ") + call + " failed with " +
                        (name ? name.get() : "?") + " (" + std::to_string(flag) + ")";
     if (!message.empty()) what += ": " + message;
     throw CvodeError(what, flag);
@@ -90,7 +90,7 @@ inline void check(int flag, const char* call, const std::string& message = std::
 template <class T>
 T* require(T* object, const char* call) {
   if (object == nullptr)
-    throw CvodeError(std::string("mjukf::sundials::Cvode: ") + call + " returned null", CV_MEM_NULL);
+    throw CvodeError(std::string("mjukf::Cvode: ") + call + " returned null", CV_MEM_NULL);
   return object;
 }
 
@@ -179,7 +179,7 @@ class Session {
   std::unique_ptr<void, MemoryDeleter> memory_;
 };
 
-}  // namespace detail
+}  // namespace detail::cvode
 
 /// `f(t, x) = model.derivative(t, x, model.input(t), θ)`: a model with its own input signal, as the
 /// filters integrate it (detail/propagation.hpp). The model is held by reference.
@@ -210,10 +210,10 @@ class Cvode {
   explicit Cvode(const CvodeSettings& settings = CvodeSettings()) : settings_(settings) {
     if (!(settings.relativeTolerance >= 0) || !(settings.absoluteTolerance >= 0) ||
         !(settings.relativeTolerance + settings.absoluteTolerance > 0))
-      throw std::invalid_argument("mjukf::sundials::Cvode: setting 'tolerances' must be non-negative, not both zero");
-    if (settings.maxSteps < 1) throw std::invalid_argument("mjukf::sundials::Cvode: setting 'maxSteps' must be positive");
+      throw std::invalid_argument("mjukf::Cvode: setting 'tolerances' must be non-negative, not both zero");
+    if (settings.maxSteps < 1) throw std::invalid_argument("mjukf::Cvode: setting 'maxSteps' must be positive");
     if (settings.maxOrder < 1 || settings.maxOrder > 5)
-      throw std::invalid_argument("mjukf::sundials::Cvode: setting 'maxOrder' must lie in 1 … 5");
+      throw std::invalid_argument("mjukf::Cvode: setting 'maxOrder' must lie in 1 … 5");
   }
 
   const CvodeSettings& settings() const { return settings_; }
@@ -228,7 +228,7 @@ class Cvode {
   template <class F, class State>
   State integrate(F&& f, Scalar t0, const State& x0, Scalar t1) const {
     checkState<State>();
-    detail::Session<std::remove_reference_t<F>, State> session(f, double(t0), x0, settings_);
+    detail::cvode::Session<std::remove_reference_t<F>, State> session(f, double(t0), x0, settings_);
     return session.advance(double(t1));
   }
 
@@ -238,7 +238,7 @@ class Cvode {
   template <class F, class State, class Observer>
   CvodeStats integrateGrid(F&& f, Scalar t0, const State& x0, Scalar h, long steps, Observer&& observer) const {
     checkState<State>();
-    detail::Session<std::remove_reference_t<F>, State> session(f, double(t0), x0, settings_);
+    detail::cvode::Session<std::remove_reference_t<F>, State> session(f, double(t0), x0, settings_);
     observer(0L, t0, x0);
     for (long k = 1; k <= steps; ++k) {
       const double tk = double(t0) + double(k) * double(h);
@@ -251,10 +251,10 @@ class Cvode {
   template <class State>
   static constexpr void checkState() {
     static_assert(State::RowsAtCompileTime != Eigen::Dynamic && State::ColsAtCompileTime == 1,
-                  "mjukf::sundials::Cvode needs a fixed-size column vector");
+                  "mjukf::Cvode needs a fixed-size column vector");
   }
 
   CvodeSettings settings_;
 };
 
-}  // namespace mjukf::sundials
+}  // namespace mjukf
