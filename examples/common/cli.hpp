@@ -73,7 +73,8 @@ class Arguments {
   /// A comma-separated list of exactly `count` finite numbers.
   std::vector<double> numbers(const std::string& flag, std::size_t count) const {
     std::vector<double> result;
-    std::string_view rest = text(flag);
+    const std::string all = text(flag);
+    std::string_view rest = all;
     for (;;) {
       const std::size_t comma = rest.find(',');
       result.push_back(parseNumber(flag, std::string(rest.substr(0, comma)), false));

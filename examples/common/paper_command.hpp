@@ -98,9 +98,9 @@ Figure parameterFigure(const std::string& png, const std::string& title, const s
     const Quantity& q = Plant::parameters[std::size_t(i)];
     figure.panels.push_back(
         {std::string(q.label) + " estimates", "time t (s)", withUnit(q),
-         {{dataFile, 1, dataParameterColumn(data, i), "truth", "lines lw 2 dt 2 lc rgb 'black'", every},
-          {jointFile, 1, estimateParameterColumn<Model>(i), "JUKF", "lines lw 1.5 lc rgb '#1f77b4'", every},
-          {modifiedFile, 1, estimateParameterColumn<Model>(i), "MJUKF", "lines lw 1.5 lc rgb '#d62728'", every}}});
+         {{jointFile, 1, estimateParameterColumn<Model>(i), "JUKF", "lines lw 1.5 lc rgb '#1f77b4'", every},
+          {modifiedFile, 1, estimateParameterColumn<Model>(i), "MJUKF", "lines lw 1.5 lc rgb '#d62728'", every},
+          {dataFile, 1, dataParameterColumn(data, i), "truth", "lines lw 2 dt 2 lc rgb 'black'", every}}});
   }
   return figure;
 }

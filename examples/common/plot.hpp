@@ -85,7 +85,7 @@ class Plotter {
          std::to_string(figure.height) + (terminal_ == "pngcairo" ? " enhanced font 'Sans,10'" : "") + "\n";
     s += "set output '" + figure.png + "'\n";
     s += "set datafile separator ','\n";
-    s += "set grid\nset key top right box opaque\n";
+    s += "set grid\nset key outside right top vertical Left reverse\n";
     s += "set multiplot layout " + std::to_string(figure.rows) + "," + std::to_string(figure.columns) +
          " title \"" + figure.title + "\" font ',12'\n";
     for (const Panel& panel : figure.panels) {
