@@ -3,10 +3,14 @@
 // Models, steppers and helpers shared by the core tests.
 
 #include <random>
+#include <type_traits>
 
 #include <Eigen/Core>
 
 #include "mjukf/integrators/i_tr_bdf2.hpp"
+#include "mjukf/joint_ukf.hpp"
+#include "mjukf/modified_joint_ukf.hpp"
+#include "mjukf/ukf.hpp"
 
 namespace mjukf::testing {
 
@@ -59,5 +63,26 @@ Eigen::Matrix<double, N, N> randomCovariance(std::mt19937_64& rng, double scale 
     for (int c = 0; c < N; ++c) factor(r, c) = normal(rng);
   return scale * (factor * factor.transpose() + 0.1 * Eigen::Matrix<double, N, N>::Identity());
 }
+
+}  // namespace mjukf::testing
+
+namespace mjukf::testing {
+
+/// The three filters on one experiment of the paper, built with its settings, so typed tests can
+/// sweep filter × plant.
+template <template <class, class> class Filter, class Experiment>
+struct PaperFilter {
+  using Model = typename Experiment::Model;
+  using Type = Filter<Model, ITrBdf2<typename Model::Scalar>>;
+  static Type make() {
+    if constexpr (std::is_same_v<Type, Ukf<Model, ITrBdf2<typename Model::Scalar>>>)
+      return Type(Model(), Experiment::initialState(), Model::trueParameters(), Experiment::ukf());
+    else if constexpr (std::is_same_v<Type, JointUkf<Model, ITrBdf2<typename Model::Scalar>>>)
+      return Type(Model(), Experiment::initialState(), Experiment::initialParameters(), Experiment::jointUkf());
+    else
+      return Type(Model(), Experiment::initialState(), Experiment::initialParameters(),
+                  Experiment::modifiedJointUkf());
+  }
+};
 
 }  // namespace mjukf::testing
