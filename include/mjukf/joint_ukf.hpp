@@ -73,7 +73,8 @@ class JointUkf : public detail::TimeStepping<JointUkf<Model_, Integrator_>, Mode
     detail::validateNoiseSettings(owner, settings);
     detail::requireFinite(owner, "initialState", initialState);
     detail::requireFinite(owner, "initialParameters", initialParameters);
-    augmented_ << initialState, initialParameters;
+    augmented_.template head<StateDim>() = initialState;
+    augmented_.template tail<ParamDim>() = initialParameters;
   }
 
   /// Measurement update, algorithms.md §3 on the augmented vector, g(z) = g(x, θ). Uses the sigma

@@ -4,7 +4,7 @@
 /// Umbrella header: the whole public API of mjukf.
 
 #include "mjukf/diagnostics.hpp"
-#include "mjukf/integrators/i_tr_bdf2.hpp"
+#include "mjukf/integrators/integrators.hpp"
 #include "mjukf/joint_ukf.hpp"
 #include "mjukf/model.hpp"
 #include "mjukf/models/coupled_tank.hpp"
