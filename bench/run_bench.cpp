@@ -1,0 +1,81 @@
+// run/<plant>/<filter>: a whole paper run over the reference measurement file (tank 200 s, robot 20 s,
+// h = 1 ms) with the paper's schedule (algorithms.md §7), accumulating the RMSE of the parameters as
+// the conformance test does. The file is read once, outside the timed loop. Counters: rmse_theta1
+// (and rmse_theta2 on the robot), to show the timed runs are the conformance runs.
+
+#include <string>
+
+#include <benchmark/benchmark.h>
+
+#include "bench_support.hpp"
+#include "common/csv.hpp"
+#include "mjukf/paper_schedule.hpp"
+
+namespace mjukf::bench {
+namespace {
+
+template <class Experiment>
+const char* referenceFile() {
+  return std::is_same_v<Experiment, Tank> ? "coupled_tank_reference.csv" : "flexible_joint_reference.csv";
+}
+
+template <class Experiment>
+const std::vector<typename Experiment::Model::Meas>& referenceMeasurements() {
+  using Meas = typename Experiment::Model::Meas;
+  static const std::vector<Meas> y = [] {
+    const auto table = examples::readCsv(std::string(MJUKF_DATA_DIR) + "/" + referenceFile<Experiment>());
+    std::vector<Meas> rows(table.rows());
+    for (int c = 0; c < Meas::RowsAtCompileTime; ++c) {
+      const auto& column = table.column("y" + std::to_string(c + 1));
+      for (std::size_t k = 0; k < rows.size(); ++k) rows[k](c) = column[k];
+    }
+    return rows;
+  }();
+  return y;
+}
+
+template <FilterKind Kind, class Experiment>
+void wholeRun(benchmark::State& state) {
+  using Model = typename Experiment::Model;
+  using Filter = FilterType<Kind, Model>;
+  const auto& y = referenceMeasurements<Experiment>();
+  const auto truth = Model::trueParameters();
+  Eigen::Matrix<double, Model::ParamDim, 1> rmse = decltype(rmse)::Zero();
+  for (auto _ : state) {
+    auto filter = makeFilter<Kind, Experiment>();
+    RmseAccumulator<double, Model::ParamDim> accumulator;
+    const auto outcome = runPaperSchedule(
+        filter, static_cast<long>(y.size()), Experiment::stepSize, Experiment::measurementEvery,
+        [&](long k) -> const typename Model::Meas& { return y[static_cast<std::size_t>(k)]; },
+        [&](long k, const Filter& f) {
+          if (k >= Experiment::rmseFromRow) accumulator.add(f.parameters(), truth);
+        });
+    if (outcome.status != Status::Ok) {
+      state.SkipWithError(("run stopped at row " + std::to_string(outcome.row)).c_str());
+      break;
+    }
+    rmse = accumulator.value();
+    benchmark::DoNotOptimize(rmse.data());
+  }
+  state.counters["rows"] = double(y.size());
+  for (int i = 0; i < Model::ParamDim; ++i) state.counters["rmse_theta" + std::to_string(i + 1)] = rmse(i);
+}
+
+template <FilterKind Kind, class Experiment>
+void registerRun() {
+  const std::string name = std::string("run/") + plantName<Experiment>() + "/" + filterName(Kind);
+  benchmark::RegisterBenchmark(name.c_str(), wholeRun<Kind, Experiment>)->Unit(benchmark::kMillisecond);
+}
+
+const bool registered = [] {
+  registerRun<FilterKind::Ukf, Tank>();
+  registerRun<FilterKind::Jukf, Tank>();
+  registerRun<FilterKind::Mjukf, Tank>();
+  registerRun<FilterKind::Ukf, Robot>();
+  registerRun<FilterKind::Jukf, Robot>();
+  registerRun<FilterKind::Mjukf, Robot>();
+  return true;
+}();
+
+}  // namespace
+}  // namespace mjukf::bench
