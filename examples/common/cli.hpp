@@ -6,6 +6,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <set>
 #include <stdexcept>
@@ -59,14 +60,18 @@ class Arguments {
     return parseNumber(flag, text(flag), allowInfinity);
   }
 
-  /// An integer of at least `minimum`.
-  long integer(const std::string& flag, long fallback, long minimum) const {
+  /// An integer from `minimum` to `maximum`; the caller's type must hold `maximum` (no silent wrap).
+  long integer(const std::string& flag, long fallback, long minimum,
+               long maximum = std::numeric_limits<long>::max()) const {
     if (!has(flag)) return fallback;
     const std::string& value = text(flag);
     long result = 0;
     const auto [end, error] = std::from_chars(value.data(), value.data() + value.size(), result);
-    if (value.empty() || error != std::errc() || end != value.data() + value.size() || result < minimum)
-      throw UsageError("flag " + flag + " needs an integer >= " + std::to_string(minimum) + ", not '" + value + "'");
+    if (value.empty() || error != std::errc() || end != value.data() + value.size() || result < minimum ||
+        result > maximum)
+      throw UsageError("flag " + flag + " needs an integer >= " + std::to_string(minimum) +
+                       (maximum < std::numeric_limits<long>::max() ? " and <= " + std::to_string(maximum) : "") +
+                       ", not '" + value + "'");
     return result;
   }
 

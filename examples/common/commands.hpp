@@ -4,6 +4,7 @@
 
 #include <cstdio>
 #include <iostream>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -89,7 +90,8 @@ FilterSetup<Experiment> filterSetup(const Arguments& args) {
   requireFilter(args, "--transform", mjukf, "mjukf");
   requireFilter(args, "--p-theta", mjukf, "mjukf");
 
-  setup.measurementEvery = static_cast<int>(args.integer("--every", setup.measurementEvery, 1));
+  setup.measurementEvery =
+      static_cast<int>(args.integer("--every", setup.measurementEvery, 1, std::numeric_limits<int>::max()));
   overrideVector(args, "--x0", setup.initialState);
   overrideVector(args, "--theta0", setup.initialParameters);
   for (auto* sigma : {&setup.ukf.sigmaPoints, &setup.jointUkf.sigmaPoints, &setup.modifiedJointUkf.sigmaPoints}) {

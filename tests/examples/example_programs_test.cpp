@@ -352,4 +352,18 @@ TEST(CommandLine, UnknownFlagsAndBadValuesGetTheUsage) {
   EXPECT_NE(help.output.find("simulate"), std::string::npos);
 }
 
+// --every is an int in the filter setup: a larger value must be refused, not wrapped (2^32 + 2 ran
+// with N = 2, 2^31 became INT_MIN).
+TEST(CommandLine, EveryBeyondIntRangeIsRefused) {
+  const std::string out = scratch("o.csv");
+  fs::remove(out);
+  const std::string est = kRobot + " estimate --filter mjukf --data " + kData + "/flexible_joint_reference.csv --out " + out;
+  for (const char* every : {"4294967298", "2147483648", "99999999999999999999999"}) {
+    const Result r = run(est + " --every " + every);
+    EXPECT_EQ(r.exitCode, 64) << every << "\n" << r.output;
+    EXPECT_NE(r.output.find("--every needs an integer >= 1 and <= 2147483647"), std::string::npos) << r.output;
+  }
+  EXPECT_FALSE(fs::exists(out));
+}
+
 }  // namespace
