@@ -77,7 +77,7 @@ void splitFields(std::string_view line, Field&& field) {
 
 /// Reads a whole CSV file. Throws CsvError with the line number for a missing file, an empty file, a
 /// duplicated column name, a row with too few or too many fields, or a field that is not a number
-/// (NaN and infinities are accepted as numbers; the filters decide what to do with them).
+/// (NaN and infinities are accepted as numbers here; loadPlantData refuses them in the columns it uses).
 inline CsvTable readCsv(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw CsvError(path, 0, "cannot open the file");

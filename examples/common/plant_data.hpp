@@ -44,12 +44,24 @@ struct PlantData {
 
 namespace detail {
 
+// Column `name` of `table`, refused at the first NaN or infinity: a filter would skip one on a row
+// without a measurement and stop half way on one with, and a truth of NaN makes a NaN RMSE.
+inline const std::vector<double>& finiteColumn(const CsvTable& table, const std::string& path, const std::string& name) {
+  const auto& column = table.column(name);
+  for (std::size_t k = 0; k < column.size(); ++k)
+    if (!std::isfinite(column[k]))
+      throw CsvError(path, static_cast<long>(k) + 2,
+                     "column '" + name + "' holds " + std::to_string(column[k]) + ": only finite numbers are allowed");
+  return column;
+}
+
 // Copies columns `prefix1…prefixN suffix` of `table` into a vector of fixed-size vectors.
 template <class Vector>
-std::vector<Vector> readVectors(const CsvTable& table, const std::string& prefix, const std::string& suffix) {
+std::vector<Vector> readVectors(const CsvTable& table, const std::string& path, const std::string& prefix,
+                                const std::string& suffix) {
   std::vector<Vector> rows(table.rows());
   for (int c = 0; c < Vector::RowsAtCompileTime; ++c) {
-    const auto& column = table.column(prefix + std::to_string(c + 1) + suffix);
+    const auto& column = finiteColumn(table, path, prefix + std::to_string(c + 1) + suffix);
     for (std::size_t k = 0; k < rows.size(); ++k) rows[k](c) = column[k];
   }
   return rows;
@@ -66,7 +78,8 @@ inline int countColumns(const CsvTable& table, const std::string& prefix, int n,
 
 /// Reads a measurement file. Requires columns t and y1…ym and one row per step of `h` starting at
 /// t = 0; takes x*_true and theta*_true when all of them are present, else the parameter truth is
-/// `fallbackTruth`. Throws CsvError (with the line number) for anything malformed.
+/// `fallbackTruth`. Throws CsvError (with the line number) for anything malformed, NaN and infinities
+/// in the columns it reads included (the whole file is checked before any estimation starts).
 template <class Model>
 PlantData<Model> loadPlantData(const std::string& path, double h, const typename Model::Param& fallbackTruth) {
   const CsvTable table = readCsv(path);
@@ -83,7 +96,7 @@ PlantData<Model> loadPlantData(const std::string& path, double h, const typename
   if (table.rows() == 0) throw CsvError(path, 2, "no data rows after the header");
 
   // The schedule pairs row k with t_k = k h: a file on another grid would be silently misread.
-  const auto& t = table.column("t");
+  const auto& t = detail::finiteColumn(table, path, "t");
   for (std::size_t k = 0; k < t.size(); ++k) {
     const double expected = static_cast<double>(k) * h;
     if (!(std::abs(t[k] - expected) <= 0.25 * h))
@@ -95,12 +108,12 @@ PlantData<Model> loadPlantData(const std::string& path, double h, const typename
 
   PlantData<Model> data;
   data.stepSize = h;
-  data.y = detail::readVectors<typename Model::Meas>(table, "y", "");
+  data.y = detail::readVectors<typename Model::Meas>(table, path, "y", "");
   if (requireAllOrNone("x", Model::StateDim, "_true"))
-    data.stateTruth = detail::readVectors<typename Model::State>(table, "x", "_true");
+    data.stateTruth = detail::readVectors<typename Model::State>(table, path, "x", "_true");
   data.parameterTruthFromFile = requireAllOrNone("theta", Model::ParamDim, "_true");
   if (data.parameterTruthFromFile)
-    data.parameterTruth = detail::readVectors<typename Model::Param>(table, "theta", "_true");
+    data.parameterTruth = detail::readVectors<typename Model::Param>(table, path, "theta", "_true");
   else
     data.parameterTruth.assign(table.rows(), fallbackTruth);
   return data;

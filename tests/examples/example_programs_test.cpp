@@ -291,6 +291,7 @@ TEST_P(MalformedCsv, ExitsWithCodeTwoAndTheLineNumber) {
   const auto& c = GetParam();
   const std::string path = writeFile("bad.csv", c.text);
   const std::string out = scratch("out.csv");
+  fs::remove(out);
   for (const std::string& command : std::vector<std::string>{kTank + " estimate --filter jukf --data " + path + " --out " + out,
                                     kTank + " paper --runs 1 --out-dir " + scratch("paper") + " --data " + path}) {
     const Result r = run(command);
@@ -309,7 +310,16 @@ INSTANTIATE_TEST_SUITE_P(
                       MalformedCase{"MissingColumn", "t,y1,theta1_true\n0,0,6\n", "1"},
                       MalformedCase{"HeaderOnly", "t,y1,y2\n", "2"},
                       MalformedCase{"WrongTimeGrid", "t,y1,y2\n0,0,0\n0.001,1,2\n0.004,1,2\n", "4"},
-                      MalformedCase{"BlankLineInside", "t,y1,y2\n0,0,0\n\n0.002,1,2\n", "3"}),
+                      MalformedCase{"BlankLineInside", "t,y1,y2\n0,0,0\n\n0.002,1,2\n", "3"},
+                      // Non-finite values: row 1 is not a measurement row of the tank (every 2 steps), so
+                      // a NaN there used to be ignored; on row 2 it stopped the run half way.
+                      MalformedCase{"NanInUnmeasuredRow", "t,y1,y2\n0,0,0\n0.001,nan,2\n0.002,1,2\n", "3"},
+                      MalformedCase{"InfInMeasuredRow", "t,y1,y2\n0,0,0\n0.001,1,2\n0.002,1,inf\n", "4"},
+                      MalformedCase{"NanInTime", "t,y1,y2\n0,0,0\nnan,1,2\n", "3"},
+                      MalformedCase{"InfInStateTruth",
+                                    "t,y1,y2,x1_true,x2_true,theta1_true\n0,0,0,0,0,6\n0.001,1,2,-inf,2,6\n", "3"},
+                      MalformedCase{"NanInParameterTruth",
+                                    "t,y1,y2,x1_true,x2_true,theta1_true\n0,0,0,0,0,6\n0.001,1,2,1,2,nan\n", "3"}),
     [](const auto& info) { return std::string(info.param.name); });
 
 TEST(MalformedCsv, MissingFileIsReported) {
