@@ -35,7 +35,7 @@ int simulateCommand(const std::vector<std::string>& words) {
     options.duration = change->duration;
   }
   options.duration = args.number("--duration", options.duration);
-  if (!(options.duration >= 0)) throw UsageError("--duration needs a time >= 0");
+  requireSimulationDuration("--duration", options.duration, options.stepSize);
   options.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0));
   options.snrDb = args.number("--snr-db", 30, /*allowInfinity=*/true);
 

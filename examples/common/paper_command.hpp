@@ -166,7 +166,7 @@ int paperCommand(const std::vector<std::string>& words) {
   const long runs = args.integer("--runs", 20, 1);
   const auto seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0));
   const double duration = args.number("--duration", Experiment::duration);
-  if (!(duration > 0)) throw UsageError("--duration needs a positive time");
+  requireSimulationDuration("--duration", duration, Experiment::stepSize);
   std::error_code error;
   fs::create_directories(outDir, error);
   if (error) throw OutputError(outDir + ": cannot create the directory: " + error.message());

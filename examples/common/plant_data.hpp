@@ -22,8 +22,9 @@ struct TrueParameters {
   Param after = before;
   double changeAt = std::numeric_limits<double>::infinity();
 
+  // Compared in double: lround of a change time far beyond the run would overflow.
   Param atRow(long row, double h) const {
-    return std::isfinite(changeAt) && row >= std::lround(changeAt / h) ? after : before;
+    return std::isfinite(changeAt) && double(row) >= std::round(changeAt / h) ? after : before;
   }
 };
 

@@ -6,12 +6,30 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <random>
+#include <stdexcept>
+#include <string>
 
+#include "common/cli.hpp"
 #include "common/plant_data.hpp"
 #include "mjukf/integrators/i_tr_bdf2.hpp"
 
 namespace mjukf::examples {
+
+/// The most rows a simulation may have. A row of data and of each filter's estimates together take
+/// about 200 bytes (the robot, `paper`), so this is about 2 GB; the paper's runs have 2·10⁵ rows.
+constexpr long kMaxSimulationRows = 10'000'000;
+
+/// Refuses a `flag` duration that is not positive or gives more than kMaxSimulationRows rows at step
+/// `h` (checked in double, before the row count is rounded to an integer, which could overflow).
+inline void requireSimulationDuration(const char* flag, double duration, double h) {
+  if (duration > 0 && duration / h + 1 <= double(kMaxSimulationRows)) return;
+  char limit[160];
+  std::snprintf(limit, sizeof limit, " needs a time > 0 s of at most %ld steps of h = %g s (%g s), not %g", kMaxSimulationRows,
+                h, double(kMaxSimulationRows - 1) * h, duration);
+  throw UsageError(flag + std::string(limit));
+}
 
 template <class Model>
 struct SimulationOptions {
@@ -42,6 +60,8 @@ template <class Model>
 PlantData<Model> simulatePlant(const Model& model, const SimulationOptions<Model>& options) {
   using State = typename Model::State;
   const double h = options.stepSize;
+  if (!(options.duration >= 0 && options.duration / h + 1 <= double(kMaxSimulationRows)))
+    throw std::invalid_argument("simulatePlant: duration " + std::to_string(options.duration) + " s out of range");
   const long rows = std::lround(options.duration / h) + 1;
   const ITrBdf2<double> integrator;
 

@@ -275,6 +275,33 @@ TEST(Paper, RobotRunsBothScenariosOnTheGivenFiles) {
   EXPECT_EQ(truth.column("theta2_true")[5000], 0.30);
 }
 
+// A duration must give a positive number of steps that fits in memory: 1e300 s overflowed lround
+// (undefined behaviour), 1e7 s asked for 1e10 rows.
+TEST(CommandLine, DurationIsPositiveAndBounded) {
+  const std::string sim = kTank + " simulate --out " + scratch("s.csv");
+  for (const std::string& command :
+       {sim + " --duration 1e300", sim + " --duration 1e7", sim + " --duration 0", sim + " --duration -1",
+        kRobot + " simulate --out " + scratch("s.csv") + " --change-at 1 --duration 1e300",
+        kTank + " paper --runs 1 --out-dir " + scratch("paper") + " --duration 1e300",
+        kTank + " paper --runs 1 --out-dir " + scratch("paper") + " --duration 0"}) {
+    const Result r = run(command);
+    EXPECT_EQ(r.exitCode, 64) << command << "\n" << r.output;
+    EXPECT_NE(r.output.find("--duration needs a time > 0 s of at most 10000000 steps"), std::string::npos)
+        << command << "\n" << r.output;
+  }
+}
+
+// A change time beyond any run is no change at all (it overflowed lround and switched at row 0).
+TEST(Simulate, ChangeAtBeyondTheRunChangesNothing) {
+  const std::string out = scratch("change.csv");
+  const Result r = run(kRobot + " simulate --out " + out + " --duration 0.01 --change-at 1e300");
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  const auto table = readCsv(out);
+  ASSERT_EQ(table.rows(), 11u);
+  for (double theta : table.column("theta1_true")) ASSERT_EQ(theta, 0.15);
+  for (double theta : table.column("theta2_true")) ASSERT_EQ(theta, 0.21);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Malformed input: exit code 2 and the line number, never a crash or a partial run.
 
