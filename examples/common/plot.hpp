@@ -3,14 +3,53 @@
 // Figures drawn by gnuplot from the CSV files the programs write. Each figure's script is kept next
 // to its PNG (name.gp), so a user can restyle a plot without rerunning anything.
 
-#include <cstdio>
-#include <cstdlib>
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <cerrno>
 #include <fstream>
 #include <iostream>
 #include <string>
 #include <vector>
 
+extern char** environ;  // POSIX: the environment gnuplot inherits
+
 namespace mjukf::examples {
+
+namespace detail {
+
+// Runs `gnuplot arguments…` with no shell in between, so that no path is ever read as shell text;
+// `quiet` sends its output to /dev/null. Returns whether it ran and exited with 0.
+inline bool runGnuplot(std::vector<std::string> arguments, bool quiet) {
+  arguments.insert(arguments.begin(), "gnuplot");
+  std::vector<char*> argv;
+  for (auto& argument : arguments) argv.push_back(argument.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  if (posix_spawn_file_actions_init(&actions) != 0) return false;
+  if (quiet) {
+    posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+    posix_spawn_file_actions_adddup2(&actions, 1, 2);
+  }
+  pid_t pid = 0;
+  const int error = posix_spawnp(&pid, "gnuplot", &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (error != 0) return false;
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0)
+    if (errno != EINTR) return false;
+  return WIFEXITED(status) && WEXITSTATUS(status) == 0;
+}
+
+// `text` as a gnuplot single-quoted string, where a quote is written twice and nothing else is special.
+inline std::string gnuplotQuote(const std::string& text) {
+  std::string quoted = "'";
+  for (char c : text) quoted += c == '\'' ? std::string("''") : std::string(1, c);
+  return quoted + "'";
+}
+
+}  // namespace detail
 
 /// One curve: column `y` against column `x` (1-based) of a CSV file with a header row.
 struct Series {
@@ -44,9 +83,9 @@ struct Figure {
 class Plotter {
  public:
   Plotter() {
-    if (std::system("gnuplot -e 'set terminal pngcairo' >/dev/null 2>&1") == 0)
+    if (detail::runGnuplot({"-e", "set terminal pngcairo"}, true))
       terminal_ = "pngcairo";
-    else if (std::system("gnuplot -e 'set terminal png' >/dev/null 2>&1") == 0)
+    else if (detail::runGnuplot({"-e", "set terminal png"}, true))
       terminal_ = "png";
   }
 
@@ -61,6 +100,15 @@ class Plotter {
       warned_ = true;
       return false;
     }
+    // A gnuplot string cannot hold a line break, so such a path cannot be plotted.
+    std::vector<const std::string*> paths{&figure.png};
+    for (const Panel& panel : figure.panels)
+      for (const Series& series : panel.series) paths.push_back(&series.file);
+    for (const std::string* path : paths)
+      if (path->find_first_of("\n\r") != std::string::npos) {
+        std::cout << "cannot plot with a line break in a path: no " << figure.png << "\n";
+        return false;
+      }
     const std::string scriptPath = figure.png.substr(0, figure.png.rfind('.')) + ".gp";
     {
       std::ofstream script(scriptPath);
@@ -70,8 +118,7 @@ class Plotter {
         return false;
       }
     }
-    const std::string command = "gnuplot '" + scriptPath + "'";
-    if (std::system(command.c_str()) != 0) {
+    if (!detail::runGnuplot({scriptPath}, false)) {
       std::cout << "gnuplot failed on " << scriptPath << "\n";
       return false;
     }
@@ -83,7 +130,7 @@ class Plotter {
     std::string s;
     s += "set terminal " + terminal_ + " size " + std::to_string(figure.width) + "," +
          std::to_string(figure.height) + (terminal_ == "pngcairo" ? " enhanced font 'Sans,10'" : "") + "\n";
-    s += "set output '" + figure.png + "'\n";
+    s += "set output " + detail::gnuplotQuote(figure.png) + "\n";
     s += "set datafile separator ','\n";
     s += "set grid\nset key outside right top vertical Left reverse\n";
     s += "set multiplot layout " + std::to_string(figure.rows) + "," + std::to_string(figure.columns) +
@@ -96,7 +143,7 @@ class Plotter {
       for (std::size_t i = 0; i < panel.series.size(); ++i) {
         const Series& c = panel.series[i];
         if (i > 0) s += ", \\\n     ";
-        s += "'" + c.file + "' skip 1 every " + std::to_string(c.every) + " using " + std::to_string(c.x) + ":" +
+        s += detail::gnuplotQuote(c.file) + " skip 1 every " + std::to_string(c.every) + " using " + std::to_string(c.x) + ":" +
              std::to_string(c.y) + " with " + c.style + " title \"" + c.title + "\"";
       }
       s += "\n";

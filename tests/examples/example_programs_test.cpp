@@ -55,6 +55,13 @@ std::string writeFile(const std::string& name, const std::string& text) {
   return path;
 }
 
+// `text` as one word for the shell.
+std::string shellQuote(const std::string& text) {
+  std::string quoted = "'";
+  for (char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return quoted + "'";
+}
+
 // The value printed as `key: value` (NaN when missing).
 double printed(const std::string& output, const std::string& key) {
   std::smatch match;
@@ -300,6 +307,24 @@ TEST(Simulate, ChangeAtBeyondTheRunChangesNothing) {
   ASSERT_EQ(table.rows(), 11u);
   for (double theta : table.column("theta1_true")) ASSERT_EQ(theta, 0.15);
   for (double theta : table.column("theta2_true")) ASSERT_EQ(theta, 0.21);
+}
+
+// gnuplot runs without a shell and the paths in its script are quoted: an out dir with a quote and a
+// space still gets its figures, and one crafted to close the quote runs nothing.
+TEST(Paper, PlotsIntoADirectoryWithQuotesAndSpaces) {
+  if (run("gnuplot --version").exitCode != 0) GTEST_SKIP() << "gnuplot is not installed";
+  const fs::path base = fs::path(scratch("x")).parent_path();
+  for (const std::string name : {"it's a dir", "x'; touch pwned; '"}) {
+    const fs::path dir = base / name;
+    fs::remove_all(dir);
+    fs::remove(base / "pwned");
+    const Result r = run("cd " + shellQuote(base.string()) + " && " + kTank +
+                         " paper --duration 1 --runs 1 --out-dir " + shellQuote(dir.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    for (const char* file : {"coupled_tank_parameters.png", "coupled_tank_states.png"})
+      EXPECT_GT(fs::exists(dir / file) ? fs::file_size(dir / file) : 0u, 1000u) << name << ": " << file << "\n" << r.output;
+    EXPECT_FALSE(fs::exists(base / "pwned")) << name << ": the shell ran a command from the path";
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
