@@ -75,7 +75,7 @@ void splitFields(std::string_view line, Field&& field) {
 
 }  // namespace detail
 
-/// Reads a whole CSV file. Throws CsvError with the line number for a missing file, an empty file, a
+/// Reads a whole CSV file, skipping a leading UTF-8 byte order mark. Throws CsvError with the line number for a missing file, an empty file, a
 /// duplicated column name, a row with too few or too many fields, or a field that is not a number
 /// (NaN and infinities are accepted as numbers here; loadPlantData refuses them in the columns it uses).
 inline CsvTable readCsv(const std::string& path) {
@@ -83,6 +83,7 @@ inline CsvTable readCsv(const std::string& path) {
   if (!in) throw CsvError(path, 0, "cannot open the file");
   std::string line;
   if (!std::getline(in, line)) throw CsvError(path, 1, "the file is empty: expected a header row");
+  if (line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);  // a UTF-8 byte order mark, as spreadsheets write
 
   std::vector<std::string> names;
   detail::splitFields(line, [&](std::string_view name) { names.emplace_back(name); });

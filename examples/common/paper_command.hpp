@@ -27,14 +27,17 @@ namespace mjukf::examples {
 
 namespace detail {
 
-// printf into a string, for the tables that go both to the console and to table.txt.
-inline std::string format(const char* pattern, ...) {
-  char buffer[512];
-  va_list args;
+// printf into a string of any length, for the tables that go both to the console and to table.txt.
+[[gnu::format(printf, 1, 2)]] inline std::string format(const char* pattern, ...) {
+  va_list args, again;
   va_start(args, pattern);
-  std::vsnprintf(buffer, sizeof buffer, pattern, args);
+  va_copy(again, args);
+  const int size = std::vsnprintf(nullptr, 0, pattern, args);
   va_end(args);
-  return buffer;
+  std::string text(size > 0 ? static_cast<std::size_t>(size) : 0, '\0');
+  if (size > 0) std::vsnprintf(text.data(), text.size() + 1, pattern, again);
+  va_end(again);
+  return text;
 }
 
 inline double median(std::vector<double> values) {
@@ -165,6 +168,9 @@ int paperCommand(const std::vector<std::string>& words) {
   const std::string outDir = args.text("--out-dir", std::string("paper_") + Plant::slug);
   const long runs = args.integer("--runs", 20, 1);
   const auto seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0));
+  // --duration is the length of a fresh simulation: refused, not ignored, when every data set is a file.
+  if (args.has("--duration") && args.has("--data") && (!change || args.has("--change-data")))
+    throw UsageError("--duration applies to a fresh simulation only, and every data set here comes from a file");
   const double duration = args.number("--duration", Experiment::duration);
   requireSimulationDuration("--duration", duration, Experiment::stepSize);
   std::error_code error;
@@ -275,7 +281,12 @@ int paperCommand(const std::vector<std::string>& words) {
   }
 
   const std::string tableFile = path("table.txt");
-  std::ofstream(tableFile) << report;
+  {
+    std::ofstream table(tableFile);
+    table << report;
+    table.close();
+    if (!table) throw OutputError(tableFile + ": cannot write the file");
+  }
   written.push_back(tableFile);
   std::cout << "\nwrote:\n";
   for (const auto& file : written) std::cout << "  " << file << "\n";

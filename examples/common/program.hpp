@@ -37,6 +37,7 @@ void printUsage(std::ostream& out) {
       << "[--runs N] [--duration S] [--seed N]\n"
       << "      JUKF and MJUKF as in the paper on a fresh simulation (or FILE): the paper's table next to ours\n"
       << "      (time: median of N = 20 runs), CSV files and PNG plots in DIR (default paper_" << Plant::slug << ").\n"
+      << "      --duration S is the length of the simulated runs (refused when every data set is a file).\n"
       << "\n"
       << "exit codes: 0 ok, 1 the run failed, 2 malformed input file, 64 bad command line\n";
 }

@@ -239,6 +239,22 @@ TEST(Estimate, SettingsAreOverridable) {
   EXPECT_NE(printed(paper.output, "rmse_theta1"), printed(other.output, "rmse_theta1"));
 }
 
+// Spreadsheet programs often start a CSV file with a UTF-8 byte order mark: it is not part of the name.
+TEST(Estimate, AcceptsAUtf8ByteOrderMark) {
+  const std::string data = scratch("tank.csv"), withMark = scratch("bom.csv");
+  ASSERT_EQ(run(kTank + " simulate --out " + data + " --duration 0.5").exitCode, 0);
+  {
+    std::ifstream in(data);
+    std::ofstream(withMark) << "\xEF\xBB\xBF" << in.rdbuf();
+  }
+  const auto table = readCsv(withMark);
+  ASSERT_FALSE(table.names().empty());
+  EXPECT_EQ(table.names().front(), "t");
+  EXPECT_EQ(table.column("y1"), readCsv(data).column("y1"));
+  const Result r = run(kTank + " estimate --filter mjukf --data " + withMark + " --out " + scratch("out.csv"));
+  EXPECT_EQ(r.exitCode, 0) << r.output;
+}
+
 // ---------------------------------------------------------------------------------------------
 // paper, on short horizons
 
@@ -282,6 +298,24 @@ TEST(Paper, RobotRunsBothScenariosOnTheGivenFiles) {
   EXPECT_EQ(truth.column("theta2_true")[5000], 0.30);
 }
 
+// --duration sets the length of a fresh simulation: with every data set from a file it would be
+// ignored, so it is refused. (The robot's --data alone still simulates the parameter-change run.)
+TEST(CommandLine, PaperRefusesDurationWhenNoSimulationUsesIt) {
+  const std::string tank = scratch("tank.csv"), robot = scratch("robot.csv");
+  ASSERT_EQ(run(kTank + " simulate --out " + tank + " --duration 0.5").exitCode, 0);
+  ASSERT_EQ(run(kRobot + " simulate --out " + robot + " --duration 0.5").exitCode, 0);
+  const std::string paper = " paper --runs 1 --duration 0.5 --out-dir " + scratch("paper");
+  for (const std::string& command :
+       {kTank + paper + " --data " + tank, kRobot + paper + " --data " + robot + " --change-data " + robot}) {
+    const Result r = run(command);
+    EXPECT_EQ(r.exitCode, 64) << command << "\n" << r.output;
+    EXPECT_NE(r.output.find("--duration applies to a fresh simulation only"), std::string::npos) << r.output;
+  }
+  const Result r = run(kRobot + paper + " --data " + robot);
+  EXPECT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_NE(r.output.find("fresh simulation (0.5 s"), std::string::npos) << r.output;
+}
+
 // A duration must give a positive number of steps that fits in memory: 1e300 s overflowed lround
 // (undefined behaviour), 1e7 s asked for 1e10 rows.
 TEST(CommandLine, DurationIsPositiveAndBounded) {
@@ -307,6 +341,28 @@ TEST(Simulate, ChangeAtBeyondTheRunChangesNothing) {
   ASSERT_EQ(table.rows(), 11u);
   for (double theta : table.column("theta1_true")) ASSERT_EQ(theta, 0.15);
   for (double theta : table.column("theta2_true")) ASSERT_EQ(theta, 0.21);
+}
+
+// table.txt is checked like every other output: a failed write is exit 1, not a file listed as written.
+TEST(Paper, FailingToWriteTheTableIsAnError) {
+  const fs::path dir = scratch("paper");
+  fs::create_directories(dir / "coupled_tank_table.txt");  // a directory where the file should go
+  const Result r = run(kTank + " paper --duration 1 --runs 1 --out-dir " + dir.string());
+  EXPECT_EQ(r.exitCode, 1) << r.output;
+  EXPECT_NE(r.output.find("coupled_tank_table.txt: cannot write the file"), std::string::npos) << r.output;
+}
+
+// The table lines are built without a fixed-size buffer: a long --data path is printed whole.
+TEST(Paper, PrintsALongDataPathWhole) {
+  fs::path dir = fs::path(scratch("x")).parent_path();
+  for (int i = 0; i < 6; ++i) dir /= std::string(100, char('a' + i));
+  fs::create_directories(dir);
+  const std::string data = (dir / "tank.csv").string();
+  ASSERT_GT(data.size(), 600u);
+  ASSERT_EQ(run(kTank + " simulate --out " + data + " --duration 1").exitCode, 0);
+  const Result r = run(kTank + " paper --runs 1 --out-dir " + scratch("paper") + " --data " + data);
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_NE(r.output.find("data: " + data + ", 1001 rows; RMSE over"), std::string::npos) << r.output;
 }
 
 // gnuplot runs without a shell and the paths in its script are quoted: an out dir with a quote and a
