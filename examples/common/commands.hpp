@@ -74,6 +74,14 @@ void overrideVector(const Arguments& args, const std::string& flag, Vector& vect
   for (std::size_t i = 0; i < values.size(); ++i) vector(long(i)) = values[i];
 }
 
+// --p0, --q and --r: the same three diagonals in every filter's settings.
+template <class Settings>
+void overrideCovariances(const Arguments& args, Settings& settings) {
+  overrideDiagonal(args, "--p0", settings.initialCovariance);
+  overrideDiagonal(args, "--q", settings.processNoise);
+  overrideDiagonal(args, "--r", settings.measurementNoise);
+}
+
 // Flags that only make sense for some filters are refused for the others rather than ignored.
 inline void requireFilter(const Arguments& args, const std::string& flag, bool applies, const char* which) {
   if (args.has(flag) && !applies) throw UsageError("flag " + flag + " applies to " + which + " only");
@@ -100,18 +108,12 @@ FilterSetup<Experiment> filterSetup(const Arguments& args) {
     sigma->kappa = args.number("--kappa", sigma->kappa);
   }
   if (ukf) {
-    overrideDiagonal(args, "--p0", setup.ukf.initialCovariance);
-    overrideDiagonal(args, "--q", setup.ukf.processNoise);
-    overrideDiagonal(args, "--r", setup.ukf.measurementNoise);
+    overrideCovariances(args, setup.ukf);
   } else if (jukf) {
-    overrideDiagonal(args, "--p0", setup.jointUkf.initialCovariance);
-    overrideDiagonal(args, "--q", setup.jointUkf.processNoise);
-    overrideDiagonal(args, "--r", setup.jointUkf.measurementNoise);
+    overrideCovariances(args, setup.jointUkf);
   } else {
     auto& s = setup.modifiedJointUkf;
-    overrideDiagonal(args, "--p0", s.initialCovariance);
-    overrideDiagonal(args, "--q", s.processNoise);
-    overrideDiagonal(args, "--r", s.measurementNoise);
+    overrideCovariances(args, s);
     s.scaling = args.number("--xi", s.scaling);
     overrideVector(args, "--p-theta", s.parameterSpread);
     if (args.has("--transform")) {

@@ -52,6 +52,9 @@ struct Comparison {
   EstimateRun<Model> modifiedJointUkf;
   double jointUkfSeconds = 0;  // median loop time
   double modifiedJointUkfSeconds = 0;
+  long rmseFrom = 0;  // first row of the RMSE window (row 0 for a run shorter than the paper's window)
+  typename Model::Param jointUkfRmse;
+  typename Model::Param modifiedJointUkfRmse;
 };
 
 // Runs both filters `runs` times, alternating so that a slow spell of the machine hits both alike.
@@ -75,6 +78,9 @@ Comparison<typename Experiment::Model> compareFilters(const PlantData<typename E
   }
   result.jointUkfSeconds = median(jointTimes);
   result.modifiedJointUkfSeconds = median(modifiedTimes);
+  result.rmseFrom = Experiment::rmseFromRow < data.rows() ? Experiment::rmseFromRow : 0;
+  result.jointUkfRmse = parameterRmse(result.jointUkf, data, result.rmseFrom);
+  result.modifiedJointUkfRmse = parameterRmse(result.modifiedJointUkf, data, result.rmseFrom);
   return result;
 }
 
@@ -90,6 +96,7 @@ int estimateParameterColumn(int i) {
 }
 
 inline std::string withUnit(const Quantity& q) { return std::string(q.label) + " (" + q.unit + ")"; }
+inline std::string rmseLabel(const Quantity& q) { return "RMSE " + std::string(q.name) + " (" + q.unit + ")"; }
 
 // Parameter estimates of both filters against the truth, one panel per parameter.
 template <class Plant, class Model>
@@ -126,6 +133,26 @@ Figure stateFigure(const std::string& png, const std::string& title, const std::
           {modifiedFile, 1, estimateStateColumn(i), "MJUKF", "lines lw 1.5 lc rgb '#d62728'", every}}});
   }
   return figure;
+}
+
+// Writes the data and both filters' estimates (`<prefix>data.csv`, `<prefix>jukf.csv`, `<prefix>mjukf.csv`)
+// and draws `<prefix>parameters.png` and `<prefix>states.png`, adding every file made to `written`.
+template <class Plant, class Model, class Path>
+void writeComparison(const Path& path, const std::string& prefix, const PlantData<Model>& data,
+                     const Comparison<Model>& result, const std::string& parameterTitle, const std::string& stateTitle,
+                     Plotter& plotter, std::vector<std::string>& written) {
+  const std::string dataFile = path(prefix + "data.csv"), jointFile = path(prefix + "jukf.csv"),
+                    modifiedFile = path(prefix + "mjukf.csv");
+  writePlantData(dataFile, data);
+  writeEstimates(jointFile, result.jointUkf, data.stepSize);
+  writeEstimates(modifiedFile, result.modifiedJointUkf, data.stepSize);
+  written.insert(written.end(), {dataFile, jointFile, modifiedFile});
+  const std::string title = std::string(Plant::title) + ": ";
+  const std::string parameters = path(prefix + "parameters.png"), states = path(prefix + "states.png");
+  if (plotter.draw(parameterFigure<Plant>(parameters, title + parameterTitle, dataFile, data, jointFile, modifiedFile)))
+    written.push_back(parameters);
+  if (plotter.draw(stateFigure<Plant>(states, title + stateTitle, dataFile, data, jointFile, modifiedFile)))
+    written.push_back(states);
 }
 
 // Loads `path`, or simulates `duration` seconds when it is empty.
@@ -191,22 +218,19 @@ int paperCommand(const std::vector<std::string>& words) {
   const auto jointSetup = FilterSetup<Experiment>::paper(FilterKind::JointUkf);
   const auto modifiedSetup = FilterSetup<Experiment>::paper(FilterKind::ModifiedJointUkf);
   const auto result = detail::compareFilters(data, jointSetup, modifiedSetup, runs);
-  const long from = Experiment::rmseFromRow < data.rows() ? Experiment::rmseFromRow : 0;
-  const auto jointRmse = parameterRmse(result.jointUkf, data, from);
-  const auto modifiedRmse = parameterRmse(result.modifiedJointUkf, data, from);
 
   const auto& paper = Plant::published;
   const auto& reference = Plant::reference;
   say(format("%s: analogue of the paper's %s", Plant::title, Plant::table));
   say(format("data: %s, %ld rows; RMSE over t >= %g s; time: median of %ld runs of the estimation loop",
-             description.c_str(), data.rows(), double(from) * Experiment::stepSize, runs));
+             description.c_str(), data.rows(), double(result.rmseFrom) * Experiment::stepSize, runs));
   say("");
   say(format("%-26s %-24s %-24s", "", "this library (C++)", (std::string("paper ") + Plant::table).c_str()));
   say(format("%-26s %-11s %-12s %-11s %-12s", "", "JUKF", "MJUKF", "JUKF", "MJUKF"));
   for (int i = 0; i < Model::ParamDim; ++i) {
     const Quantity& q = Plant::parameters[std::size_t(i)];
-    say(format("%-26s %-11.7f %-12.7f %-11.5g %-12.5g", ("RMSE " + std::string(q.name) + " (" + q.unit + ")").c_str(),
-               jointRmse(i), modifiedRmse(i), paper.jukfRmse[std::size_t(i)], paper.mjukfRmse[std::size_t(i)]));
+    say(format("%-26s %-11.7f %-12.7f %-11.5g %-12.5g", detail::rmseLabel(q).c_str(), result.jointUkfRmse(i),
+               result.modifiedJointUkfRmse(i), paper.jukfRmse[std::size_t(i)], paper.mjukfRmse[std::size_t(i)]));
   }
   say(format("%-26s %-11.4g %-12.4g %-11.5g %-12.5g", "time (s)", result.jointUkfSeconds,
              result.modifiedJointUkfSeconds, paper.jukfSeconds, paper.mjukfSeconds));
@@ -223,18 +247,8 @@ int paperCommand(const std::vector<std::string>& words) {
   say(format("  this library is %.0fx (JUKF) and %.0fx (MJUKF) faster than those scripts on this machine",
              reference.jukfSeconds / result.jointUkfSeconds, reference.mjukfSeconds / result.modifiedJointUkfSeconds));
 
-  const std::string dataFile = path("data.csv"), jointFile = path("jukf.csv"), modifiedFile = path("mjukf.csv");
-  writePlantData(dataFile, data);
-  writeEstimates(jointFile, result.jointUkf, data.stepSize);
-  writeEstimates(modifiedFile, result.modifiedJointUkf, data.stepSize);
-  written.insert(written.end(), {dataFile, jointFile, modifiedFile});
-  const std::string figures[] = {path("parameters.png"), path("states.png")};
-  if (plotter.draw(detail::parameterFigure<Plant>(figures[0], std::string(Plant::title) + ": parameter estimates",
-                                                  dataFile, data, jointFile, modifiedFile)))
-    written.push_back(figures[0]);
-  if (plotter.draw(detail::stateFigure<Plant>(figures[1], std::string(Plant::title) + ": state estimates and measurements",
-                                              dataFile, data, jointFile, modifiedFile)))
-    written.push_back(figures[1]);
+  detail::writeComparison<Plant>(path, "", data, result, "parameter estimates", "state estimates and measurements",
+                                 plotter, written);
 
   // The parameter-change scenario: the plant changes at `change->at`; MJUKF takes its own ξ.
   if (change) {
@@ -246,9 +260,6 @@ int paperCommand(const std::vector<std::string>& words) {
     auto changeModified = modifiedSetup;
     changeModified.modifiedJointUkf.scaling = change->scaling;
     const auto changeResult = detail::compareFilters(changeData, jointSetup, changeModified, 1);
-    const long changeFrom = Experiment::rmseFromRow < changeData.rows() ? Experiment::rmseFromRow : 0;
-    const auto jr = parameterRmse(changeResult.jointUkf, changeData, changeFrom);
-    const auto mr = parameterRmse(changeResult.modifiedJointUkf, changeData, changeFrom);
     say("");
     std::string what;
     for (int i = 0; i < Model::ParamDim; ++i)
@@ -256,28 +267,18 @@ int paperCommand(const std::vector<std::string>& words) {
     say(format("%s: parameter change (paper Figs. 12-14): %s at t = %g s; MJUKF xi = %g", Plant::title, what.c_str(),
                change->at, change->scaling));
     say(format("data: %s, %ld rows; RMSE over t >= %g s against the changing truth", changeDescription.c_str(),
-               changeData.rows(), double(changeFrom) * Experiment::stepSize));
+               changeData.rows(), double(changeResult.rmseFrom) * Experiment::stepSize));
     say(format("%-26s %-11s %-12s", "", "JUKF", "MJUKF"));
     for (int i = 0; i < Model::ParamDim; ++i) {
       const Quantity& q = Plant::parameters[std::size_t(i)];
-      say(format("%-26s %-11.7f %-12.7f", ("RMSE " + std::string(q.name) + " (" + q.unit + ")").c_str(), jr(i), mr(i)));
+      say(format("%-26s %-11.7f %-12.7f", detail::rmseLabel(q).c_str(), changeResult.jointUkfRmse(i),
+                 changeResult.modifiedJointUkfRmse(i)));
       say(format("%-26s %-11.5f %-12.5f", ("final " + std::string(q.name) + format(" (truth %g)", truth.after(i))).c_str(),
                  changeResult.jointUkf.parameters.back()(i), changeResult.modifiedJointUkf.parameters.back()(i)));
     }
-    const std::string cData = path("change_data.csv"), cJoint = path("change_jukf.csv"), cModified = path("change_mjukf.csv");
-    writePlantData(cData, changeData);
-    writeEstimates(cJoint, changeResult.jointUkf, changeData.stepSize);
-    writeEstimates(cModified, changeResult.modifiedJointUkf, changeData.stepSize);
-    written.insert(written.end(), {cData, cJoint, cModified});
-    const std::string changeFigures[] = {path("change_parameters.png"), path("change_states.png")};
-    if (plotter.draw(detail::parameterFigure<Plant>(
-            changeFigures[0], std::string(Plant::title) + ": parameter estimates with a parameter change", cData,
-            changeData, cJoint, cModified)))
-      written.push_back(changeFigures[0]);
-    if (plotter.draw(detail::stateFigure<Plant>(changeFigures[1],
-                                                std::string(Plant::title) + ": state estimates with a parameter change",
-                                                cData, changeData, cJoint, cModified)))
-      written.push_back(changeFigures[1]);
+    detail::writeComparison<Plant>(path, "change_", changeData, changeResult,
+                                   "parameter estimates with a parameter change",
+                                   "state estimates with a parameter change", plotter, written);
   }
 
   const std::string tableFile = path("table.txt");
