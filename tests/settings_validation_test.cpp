@@ -2,6 +2,7 @@
 // (Wrong sizes cannot be written: every matrix in the settings is sized at compile time from the model.)
 
 #include <limits>
+#include <type_traits>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -79,6 +80,33 @@ TEST(SettingsValidation, MeasurementNoiseMustBeSymmetricPositiveDefinite) {
   expectJointRejected<JointSettings>([](auto& s) { s.measurementNoise.setZero(); }, "measurementNoise");
   expectJointRejected<JointSettings>([](auto& s) { s.measurementNoise(1, 2) = 1e-4; }, "measurementNoise");
   expectModifiedRejected([](auto& s) { s.measurementNoise(3, 3) = -1e-3; }, "measurementNoise");
+}
+
+// The checks are relative to the matrix's own scale: the tank's R is 1e-7, so an absolute tolerance
+// would let a transposed or negative entry of that size through.
+TEST(SettingsValidation, SmallMatricesAreCheckedRelativeToTheirScale) {
+  using TankF = mjukf::paper::CoupledTankExperiment<float>;
+  using TankD = mjukf::paper::CoupledTankExperiment<double>;
+  auto reject = [](auto settings, const std::string& setting) {
+    using Experiment = std::conditional_t<std::is_same_v<typename decltype(settings)::Scalar, float>, TankF, TankD>;
+    expectRejected([&] { mjukf::ModifiedJointUkf<typename Experiment::Model>(typename Experiment::Model(),
+                                                                           Experiment::initialState(),
+                                                                           Experiment::initialParameters(), settings); },
+                   setting);
+  };
+  auto asymmetricR = TankF::modifiedJointUkf();
+  asymmetricR.measurementNoise(0, 1) = 5e-8f;
+  reject(asymmetricR, "measurementNoise");
+  auto indefiniteQ = TankF::modifiedJointUkf();
+  indefiniteQ.processNoise(1, 1) = -5e-7f;
+  reject(indefiniteQ, "processNoise");
+  auto tinyIndefiniteR = TankD::modifiedJointUkf();
+  tinyIndefiniteR.measurementNoise << 1e-16, 1e-14, 0.0, 1e-16;  // LLT alone would read only the lower triangle
+  reject(tinyIndefiniteR, "measurementNoise");
+  auto tinyValidR = TankD::modifiedJointUkf();
+  tinyValidR.measurementNoise *= 1e-9;  // R = 1e-16 I is legal, however small
+  EXPECT_NO_THROW(mjukf::ModifiedJointUkf<TankD::Model>(TankD::Model(), TankD::initialState(),
+                                                         TankD::initialParameters(), tinyValidR));
 }
 
 TEST(SettingsValidation, SigmaPointScaling) {

@@ -2,6 +2,7 @@
 // the filters driven by every stepper. Needs only Eigen.
 
 #define EIGEN_RUNTIME_NO_MALLOC
+#undef NDEBUG  // Eigen reports a forbidden allocation through assert: keep it on in Release builds.
 #include <Eigen/Core>
 
 #include <gtest/gtest.h>

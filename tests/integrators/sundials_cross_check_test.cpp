@@ -201,6 +201,10 @@ TEST(SundialsCrossCheck, CvodeReportsErrors) {
   CvodeSettings few;
   few.maxSteps = 5;
   EXPECT_THROW(Cvode<double>(few).integrate(spiral, 0.0, x0, 100.0), CvodeError);
+  // As a stepper, the same failures come back as a NaN state (a filter then refuses the step).
+  EXPECT_TRUE(Cvode<double>(few).step(spiral, 0.0, x0, 100.0).array().isNaN().all());
+  EXPECT_TRUE(Cvode<double>().step(nan, 0.0, x0, 1.0).array().isNaN().all());
+  EXPECT_THROW(Cvode<double>().step(throwing, 0.0, x0, 1.0), std::domain_error);
   // Settings are checked at construction.
   CvodeSettings bad;
   bad.relativeTolerance = -1;

@@ -3,6 +3,7 @@
 // Checks of user settings, run once at construction. They throw std::invalid_argument with a message
 // that names the offending setting; none of them runs on the per-step path.
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -30,13 +31,13 @@ void requireFinite(const char* owner, const char* setting, const Eigen::MatrixBa
 }
 
 // Symmetric to a tolerance relative to the largest entry: generous enough for matrices a user computed
-// as products, tight enough to catch a transposed or mistyped entry.
+// as products, tight enough to catch a transposed or mistyped entry. Relative, so that a tiny R (the
+// tank's is 1e-7) gets the same scrutiny as a large one.
 template <class Derived>
 void requireSymmetric(const char* owner, const char* setting, const Eigen::MatrixBase<Derived>& m) {
   using Scalar = typename Derived::Scalar;
   requireFinite(owner, setting, m);
-  const Scalar scale = std::max(Scalar(1), m.cwiseAbs().maxCoeff());
-  const Scalar tolerance = Scalar(1000) * std::numeric_limits<Scalar>::epsilon() * scale;
+  const Scalar tolerance = Scalar(1000) * std::numeric_limits<Scalar>::epsilon() * m.cwiseAbs().maxCoeff();
   if ((m - m.transpose()).cwiseAbs().maxCoeff() > tolerance) throwInvalid(owner, setting, "must be symmetric");
 }
 
@@ -47,15 +48,16 @@ void requirePositiveDefinite(const char* owner, const char* setting, const Eigen
   if (llt.info() != Eigen::Success) throwInvalid(owner, setting, "must be positive definite");
 }
 
-// Positive semi-definite: the smallest eigenvalue may be zero up to rounding (a Q with zero rows is legal).
+// Positive semi-definite: the smallest eigenvalue may be below zero only by rounding, relative to the
+// largest (a Q with zero rows is legal).
 template <class Derived>
 void requirePositiveSemiDefinite(const char* owner, const char* setting, const Eigen::MatrixBase<Derived>& m) {
   using Scalar = typename Derived::Scalar;
   requireSymmetric(owner, setting, m);
   Eigen::SelfAdjointEigenSolver<typename Derived::PlainObject> eigen(m, Eigen::EigenvaluesOnly);
-  const Scalar scale = std::max(Scalar(1), m.cwiseAbs().maxCoeff());
-  if (eigen.info() != Eigen::Success ||
-      eigen.eigenvalues().minCoeff() < -Scalar(1000) * std::numeric_limits<Scalar>::epsilon() * scale)
+  if (eigen.info() != Eigen::Success) throwInvalid(owner, setting, "must be positive semi-definite");
+  const Scalar largest = eigen.eigenvalues().cwiseAbs().maxCoeff();
+  if (eigen.eigenvalues().minCoeff() < -Scalar(1000) * std::numeric_limits<Scalar>::epsilon() * largest)
     throwInvalid(owner, setting, "must be positive semi-definite");
 }
 

@@ -16,6 +16,7 @@
 #include <cstdlib>
 #include <exception>
 #include <memory>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -195,8 +196,9 @@ auto modelRhs(const Model& model, const typename Model::Param& theta) {
 /// `integrate` over an interval and `integrateGrid`, which samples one solution on a uniform grid.
 ///
 /// Every call builds and frees its own SUNDIALS objects (RAII), so the object is copyable and
-/// const-callable like the other steppers, and allocates. Errors throw `CvodeError` (and an exception
-/// thrown by f is rethrown); nothing is ignored. CVODE works in double: a float State is converted
+/// const-callable like the other steppers, and allocates. Errors of `integrate` and `integrateGrid`
+/// throw `CvodeError` (and an exception thrown by f is rethrown); `step` returns NaN instead, see
+/// there; nothing is ignored. CVODE works in double: a float State is converted
 /// on the way in and out, so tolerances below ~1e-6 mean nothing for float models.
 template <class Scalar_ = double>
 class Cvode {
@@ -218,10 +220,17 @@ class Cvode {
 
   const CvodeSettings& settings() const { return settings_; }
 
-  /// x(t + h) from x(t) = x.
+  /// x(t + h) from x(t) = x. As a filter's stepper it must report failure the way the filters
+  /// understand: when CVODE fails (too much work, error test failures, a non-finite f), it returns a
+  /// state of NaN, which the filter refuses with Status::NonFiniteResult, leaving its estimate intact.
+  /// An exception thrown by f itself still propagates. `integrate` throws CvodeError instead.
   template <class F, class State>
   State step(F&& f, Scalar t, const State& x, Scalar h) const {
-    return integrate(std::forward<F>(f), t, x, t + h);
+    try {
+      return integrate(std::forward<F>(f), t, x, t + h);
+    } catch (const CvodeError&) {
+      return State::Constant(std::numeric_limits<Scalar>::quiet_NaN());
+    }
   }
 
   /// x(t1) from x(t0) = x0.
