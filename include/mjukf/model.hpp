@@ -14,7 +14,9 @@
 ///   State derivative(Scalar t, const State& x, const Input& u, const Param& theta) const;
 ///   // y = g(x, θ)
 ///   Meas measurement(const State& x, const Param& theta) const;
-///   // Optional: a known input signal u(t), evaluated at every stage time of the integrator.
+///   // Optional: a known input signal u(t), evaluated at every stage time of the integrator. It must
+///   // be a function of t alone: a time update evaluates it once per distinct stage time and gives
+///   // the value to every sigma point.
 ///   Input input(Scalar t) const;
 /// };
 /// \endcode

@@ -18,12 +18,13 @@ class TimeStepping {
   using Input = typename Model::Input;
 
   /// Unscented time update (algorithms.md §2) from t over `steps` integrator steps of size h, with the
-  /// model's input signal u(t) evaluated at every stage time. The sigma points are drawn once at t and
-  /// propagated through all steps; Q is added once.
+  /// model's input signal u(t) evaluated at every stage time (once per distinct stage time, shared by
+  /// all sigma points). The sigma points are drawn once at t and propagated through all steps; Q is
+  /// added once.
   template <class M = Model>
   Status timeUpdate(Scalar t, Scalar h, int steps = 1) {
     static_assert(hasInputSignal<M>, "this model has no input(t): pass the input, timeUpdate(t, h, u)");
-    return self().timeUpdateWith(SignalInput<Model>{self().model()}, t, h, steps);
+    return self().timeUpdateWith(SharedSignalInput<Model>(self().model()), t, h, steps);
   }
 
   /// Unscented time update with the input u held constant over the steps (zero-order hold).

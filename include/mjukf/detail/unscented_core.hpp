@@ -38,7 +38,7 @@ class UnscentedCore {
   void predict(const Matrix& processNoise, Vector& mean, Matrix& cov) {
     unscentedMean(workPoints_, sigmaPoints_.meanWeights(), mean);
     stateDeviations_.noalias() = workPoints_.colwise() - mean;
-    unscentedCovarianceFromDeviations(stateDeviations_, stateDeviations_, sigmaPoints_.covarianceWeights(), cov);
+    weightedOuterSum(stateDeviations_, stateDeviations_, cov);
     cov += processNoise;
   }
 
@@ -48,28 +48,31 @@ class UnscentedCore {
   Status correct(const Points& points, const Vector& predictedMean, const Matrix& predictedCov, const MeasVector& y,
                  const MeasMatrix& measurementNoise, Vector& mean, Matrix& cov, Diagnostics& diagnostics) {
     if (!measuredPoints_.allFinite()) return Status::NonFiniteResult;  // the model's g gave NaN or Inf
-    const auto& wc = sigmaPoints_.covarianceWeights();
     MeasVector predictedMeasurement;
     unscentedMean(measuredPoints_, sigmaPoints_.meanWeights(), predictedMeasurement);  // ŷ
     measurementDeviations_.noalias() = measuredPoints_.colwise() - predictedMeasurement;
     stateDeviations_.noalias() = points.colwise() - predictedMean;
-    unscentedCovarianceFromDeviations(measurementDeviations_, measurementDeviations_, wc,
-                                      diagnostics.innovationCovariance);
+    weightedOuterSum(measurementDeviations_, measurementDeviations_, diagnostics.innovationCovariance);
     diagnostics.innovationCovariance += measurementNoise;  // P_yy
-    unscentedCovarianceFromDeviations(stateDeviations_, measurementDeviations_, wc, crossCovariance_);  // P_xy
+    weightedOuterSum(stateDeviations_, measurementDeviations_, crossCovariance_);  // P_xy
 
     innovationLlt_.compute(diagnostics.innovationCovariance);
     if (!diagnostics.innovationCovariance.allFinite() || innovationLlt_.info() != Eigen::Success)
       return Status::InnovationNotPositiveDefinite;
     // K = P_xy P_yy⁻¹, as Kᵀ = P_yy⁻¹ P_xyᵀ with the Cholesky factor (P_yy is symmetric).
-    gainTransposed_ = innovationLlt_.solve(crossCovariance_.transpose());
+    gainTransposed_ = crossCovariance_.transpose();
+    solveLower(gainTransposed_);
+    solveUpper(gainTransposed_);
     diagnostics.innovation = y - predictedMeasurement;
     mean = predictedMean;
     mean.noalias() += gainTransposed_.transpose() * diagnostics.innovation;
     // P = P⁻ − K P_yy Kᵀ = P⁻ − P_xy Kᵀ
     cov = predictedCov;
     cov.noalias() -= crossCovariance_ * gainTransposed_;
-    diagnostics.nis = diagnostics.innovation.dot(innovationLlt_.solve(diagnostics.innovation));
+    // NIS = νᵀ P_yy⁻¹ ν = |S⁻¹ ν|² with P_yy = S Sᵀ.
+    MeasVector whitened = diagnostics.innovation;
+    solveLower(whitened);
+    diagnostics.nis = whitened.squaredNorm();
     return Status::Ok;
   }
 
@@ -83,6 +86,34 @@ class UnscentedCore {
   const SigmaPoints& sigmaPoints() const { return sigmaPoints_; }
 
  private:
+  // Σ Wcᵢ aᵢ bᵢᵀ (unscentedCovarianceFromDeviations) as a coefficient-wise product. Left to choose,
+  // Eigen takes its general GEMM kernel once rows + columns + depth exceed 20 (JUKF on the robot:
+  // 6 + 6 + 13), and packing the operands then costs more than the whole rest of the step.
+  template <class DevA, class DevB, class Out>
+  void weightedOuterSum(const DevA& a, const DevB& b, Out& out) const {
+    out.noalias() = (a * sigmaPoints_.covarianceWeights().asDiagonal()).lazyProduct(b.transpose());
+  }
+
+  // B ← S⁻¹ B and B ← S⁻ᵀ B with the lower Cholesky factor S of P_yy, by substitution a row at a time.
+  // Written out because Eigen's solve with a matrix right-hand side takes its general blocked path
+  // (packing, level-3 kernels), which costs more than all the rest of the update at these sizes.
+  template <class Rhs>
+  void solveLower(Rhs& b) const {
+    const auto& s = innovationLlt_.matrixLLT();
+    for (int i = 0; i < M; ++i) {
+      for (int k = 0; k < i; ++k) b.row(i) -= s(i, k) * b.row(k);
+      b.row(i) /= s(i, i);
+    }
+  }
+  template <class Rhs>
+  void solveUpper(Rhs& b) const {
+    const auto& s = innovationLlt_.matrixLLT();
+    for (int i = M - 1; i >= 0; --i) {
+      for (int k = i + 1; k < M; ++k) b.row(i) -= s(k, i) * b.row(k);
+      b.row(i) /= s(i, i);
+    }
+  }
+
   SigmaPoints sigmaPoints_;
   Points points_;                 // the filter's propagated points χᵢ⁺, used by the measurement update
   Points workPoints_;             // drawn, then propagated in place, before they are committed
