@@ -5,7 +5,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 build=${1:-build}
-cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release
+cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release -DMJUKF_BUILD_EXAMPLES=ON
 cmake --build "$build" -j "$(nproc)" --target mjukf_coupled_tank mjukf_flexible_joint
 out="$build/paper"
 tank="$build/examples/mjukf_coupled_tank"
