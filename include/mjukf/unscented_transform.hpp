@@ -22,7 +22,9 @@ void unscentedMean(const Eigen::MatrixBase<Points>& points, const Eigen::MatrixB
 template <class DevX, class DevY, class Weights, class Cov>
 void unscentedCovarianceFromDeviations(const Eigen::MatrixBase<DevX>& devX, const Eigen::MatrixBase<DevY>& devY,
                                        const Eigen::MatrixBase<Weights>& covWeights, Eigen::MatrixBase<Cov>& cov) {
-  cov.noalias() = devX * covWeights.asDiagonal() * devY.transpose();
+  // lazyProduct: at these sizes (L ≤ ~12) Eigen's default product takes its blocked GEMM path, whose
+  // packing costs several times the arithmetic.
+  cov.noalias() = (devX * covWeights.asDiagonal()).lazyProduct(devY.transpose());
 }
 
 /// The unscented transform of a propagated point set: its weighted mean and covariance (§2, without Q).
