@@ -6,6 +6,7 @@
 #include <limits>
 #include <type_traits>
 
+#include <Eigen/Cholesky>
 #include <gtest/gtest.h>
 
 #include "mjukf/joint_ukf.hpp"
@@ -191,20 +192,31 @@ TYPED_TEST(FailurePolicy, ModelReturnsNonFiniteValues) {
 }
 
 TYPED_TEST(FailurePolicy, CovarianceWithoutCholeskyFactor) {
-  // Q = 0 and a stepper that collapses every point: the time update leaves the state's row of P at 0
-  // (JUKF keeps the variance of θ), so the next draw of sigma points, in a time update or in an update
-  // without one, has no Cholesky factor.
+  // Q = 0 and a stepper that collapses every point: the time update would commit a P whose state row
+  // is 0 (JUKF keeps the variance of θ), which has no Cholesky factor. With the repair off the time
+  // update is refused and nothing changes.
   using Collapsing = typename TypeParam::template With<CollapsingStepper>;
   auto filter = Collapsing::make(ToyModel(), {}, 0.0);
-  ASSERT_EQ(filter.timeUpdate(0.0, 0.01), Status::Ok);
-  EXPECT_TRUE(filter.covariance().row(0).isZero(0.0));
-  const Snapshot<decltype(filter)> before(filter);
-  EXPECT_EQ(filter.timeUpdate(0.01, 0.01), Status::NotPositiveDefinite);
-  EXPECT_TRUE(Snapshot<decltype(filter)>(filter) == before);
-  ASSERT_EQ(filter.propagateMean(0.01, 0.01), Status::Ok);  // drops the propagated points
-  const Snapshot<decltype(filter)> open(filter);
-  EXPECT_EQ(filter.measurementUpdate(ToyModel::Meas(0.3)), Status::NotPositiveDefinite);
-  EXPECT_TRUE(Snapshot<decltype(filter)>(filter) == open);
+  using Filter = decltype(filter);
+  auto settings = filter.settings();
+  settings.repair.maxAttempts = 0;
+  Filter strict(filter.model(), filter.state(), filter.parameters(), settings);
+  const Snapshot<Filter> before(strict);
+  EXPECT_EQ(strict.timeUpdate(0.0, 0.01), Status::NotPositiveDefinite);
+  EXPECT_TRUE(Snapshot<Filter>(strict) == before);
+  // With the default repair, the UKF's and MJUKF's P⁻ = 0 (1 × 1) has no scale to repair against and
+  // is refused too; JUKF's singular P⁻ gets a jitter of 16ε × mean|Pᵢᵢ| and the step is taken.
+  const Snapshot<Filter> defaults(filter);
+  const Status status = filter.timeUpdate(0.0, 0.01);
+  if constexpr (std::is_same_v<Filter, mjukf::JointUkf<ToyModel, CollapsingStepper>>) {
+    ASSERT_EQ(status, Status::Repaired);
+    EXPECT_GT(filter.covariance()(0, 0), 0.0);
+    EXPECT_LE(filter.covariance()(0, 0), 16 * 2.3e-16 * 1e4 * filter.covariance().diagonal().mean());
+    EXPECT_EQ(filter.covariance().llt().info(), Eigen::Success);
+  } else {
+    EXPECT_EQ(status, Status::NotPositiveDefinite);
+    EXPECT_TRUE(Snapshot<Filter>(filter) == defaults);
+  }
 }
 
 TYPED_TEST(FailurePolicy, InnovationCovarianceWithoutCholeskyFactor) {

@@ -5,13 +5,16 @@
 
 #include <Eigen/Core>
 
+#include "mjukf/covariance_repair.hpp"
 #include "mjukf/detail/propagation.hpp"
 #include "mjukf/detail/time_stepping.hpp"
 #include "mjukf/detail/unscented_core.hpp"
 #include "mjukf/detail/validation.hpp"
 #include "mjukf/diagnostics.hpp"
 #include "mjukf/integrators/i_tr_bdf2.hpp"
+#include "mjukf/measurement_gating.hpp"
 #include "mjukf/model.hpp"
+#include "mjukf/parameter_bounds.hpp"
 #include "mjukf/sigma_points.hpp"
 #include "mjukf/status.hpp"
 
@@ -32,6 +35,13 @@ struct JointUkfSettings {
   /// P_xy and P_yy leave Q out. true: it draws new points from (x̂⁻, P⁻), which costs one more
   /// Cholesky factorisation and makes the filter the textbook Kalman filter on linear models.
   bool redrawPointsForUpdate = false;
+  /// What a step does with a covariance that is not positive definite before committing it
+  /// (covariance_repair.hpp): by default, mend rounding-level losses and refuse the rest.
+  CovarianceRepair<Scalar> repair;
+  /// The innovation gate of the measurement update (measurement_gating.hpp); off by default.
+  MeasurementGate<Scalar, Model::MeasDim> gate;
+  /// Box bounds on the estimated parameters (parameter_bounds.hpp); off by default.
+  ParameterBounds<Scalar, Model::ParamDim> parameterBounds;
 };
 
 /// Joint unscented Kalman filter: estimates z = [x; θ] with L = n + p, the parameters constant in the
@@ -73,6 +83,10 @@ class JointUkf : public detail::TimeStepping<JointUkf<Model_, Integrator_>, Mode
     detail::validateNoiseSettings(owner, settings);
     detail::requireFinite(owner, "initialState", initialState);
     detail::requireFinite(owner, "initialParameters", initialParameters);
+    detail::validateRepair(owner, settings.repair);
+    detail::validateGate(owner, settings.gate);
+    detail::validateBounds(owner, settings.parameterBounds, initialParameters);
+    boundsActive_ = settings.parameterBounds.active();
     augmented_.template head<StateDim>() = initialState;
     augmented_.template tail<ParamDim>() = initialParameters;
   }
@@ -80,26 +94,15 @@ class JointUkf : public detail::TimeStepping<JointUkf<Model_, Integrator_>, Mode
   /// Measurement update, algorithms.md §3 on the augmented vector, g(z) = g(x, θ). Uses the sigma
   /// points of the last time update as they are (see `redrawPointsForUpdate`); if the filter has none,
   /// it draws them from the current mean and covariance.
-  Status measurementUpdate(const Meas& y) {
-    if (!y.allFinite()) return Status::NonFiniteMeasurement;
-    const bool drawPoints = settings_.redrawPointsForUpdate || !hasPropagatedPoints_;
-    if (drawPoints)
-      if (const Status s = core_.draw(augmented_, covariance_); s != Status::Ok) return s;
-    const auto& points = drawPoints ? core_.workPoints() : core_.points();
-    for (int i = 0; i < SigmaPointCount; ++i)  // Yᵢ = g(xᵢ, θᵢ) of zᵢ = [xᵢ; θᵢ]
-      core_.measuredPoints().col(i) = model_.measurement(points.col(i).template head<StateDim>(),
-                                                         points.col(i).template tail<ParamDim>());
-    if (const Status s = core_.correct(points, augmented_, covariance_, y, settings_.measurementNoise,
-                                       candidateAugmented_, candidateCovariance_, candidateDiagnostics_);
-        s != Status::Ok)
-      return s;
-    if (!candidateAugmented_.allFinite() || !candidateCovariance_.allFinite()) return Status::NonFiniteResult;
-    augmented_ = candidateAugmented_;
-    covariance_ = candidateCovariance_;
-    diagnostics_ = candidateDiagnostics_;
-    hasPropagatedPoints_ = false;
-    return Status::Ok;
-  }
+  ///
+  /// Returns Ok or Repaired when the update was committed (the covariance is symmetrised and checked
+  /// before it is), MeasurementRejected when the gate refused it, or another refusal.
+  Status measurementUpdate(const Meas& y) { return update(y, nullptr); }
+
+  /// Measurement update with only the components where `present` is true (missing channels; the
+  /// others, NaN included, are ignored): exactly the update of the model reduced to those components,
+  /// with R reduced likewise.
+  Status measurementUpdate(const Meas& y, const MeasurementMask<MeasDim>& present) { return update(y, &present); }
 
   /// The state block x of the augmented mean.
   State state() const { return augmented_.template head<StateDim>(); }
@@ -117,6 +120,31 @@ class JointUkf : public detail::TimeStepping<JointUkf<Model_, Integrator_>, Mode
   const Settings& settings() const { return settings_; }
 
  private:
+  Status update(const Meas& y, const MeasurementMask<MeasDim>* present) {
+    if (!detail::presentComponentsFinite(y, present)) return Status::NonFiniteMeasurement;
+    const bool drawPoints = settings_.redrawPointsForUpdate || !hasPropagatedPoints_;
+    if (drawPoints)
+      if (const Status s = core_.draw(augmented_, covariance_); s != Status::Ok) return s;
+    const auto& points = drawPoints ? core_.workPoints() : core_.points();
+    for (int i = 0; i < SigmaPointCount; ++i)  // Yᵢ = g(xᵢ, θᵢ) of zᵢ = [xᵢ; θᵢ]
+      core_.measuredPoints().col(i) = model_.measurement(points.col(i).template head<StateDim>(),
+                                                         points.col(i).template tail<ParamDim>());
+    if (const Status s = core_.correct(points, augmented_, covariance_, y, settings_.measurementNoise, present,
+                                       settings_.gate, candidateAugmented_, candidateCovariance_,
+                                       candidateDiagnostics_);
+        s != Status::Ok)
+      return s;
+    if (!candidateAugmented_.allFinite()) return Status::NonFiniteResult;
+    const Status settled = core_.settle(candidateCovariance_, settings_.repair);
+    if (!taken(settled)) return settled;
+    if (boundsActive_) settings_.parameterBounds.clamp(candidateAugmented_.template tail<ParamDim>());
+    augmented_ = candidateAugmented_;
+    covariance_ = candidateCovariance_;
+    diagnostics_ = candidateDiagnostics_;
+    hasPropagatedPoints_ = false;
+    return settled;
+  }
+
   template <class InputSource>
   Status timeUpdateWith(const InputSource& input, Scalar t, Scalar h, int steps) {
     if (const Status s = detail::checkStep(t, h, steps); s != Status::Ok) return s;
@@ -129,12 +157,15 @@ class JointUkf : public detail::TimeStepping<JointUkf<Model_, Integrator_>, Mode
     }
     if (!points.allFinite()) return Status::NonFiniteResult;
     core_.predict(settings_.processNoise, candidateAugmented_, candidateCovariance_);
-    if (!candidateAugmented_.allFinite() || !candidateCovariance_.allFinite()) return Status::NonFiniteResult;
+    if (!candidateAugmented_.allFinite()) return Status::NonFiniteResult;
+    const Status settled = core_.settle(candidateCovariance_, settings_.repair);
+    if (!taken(settled)) return settled;
+    if (boundsActive_) settings_.parameterBounds.clamp(candidateAugmented_.template tail<ParamDim>());
     core_.commitPoints();
     augmented_ = candidateAugmented_;
     covariance_ = candidateCovariance_;
     hasPropagatedPoints_ = true;
-    return Status::Ok;
+    return settled;
   }
 
   template <class InputSource>
@@ -155,6 +186,7 @@ class JointUkf : public detail::TimeStepping<JointUkf<Model_, Integrator_>, Mode
   AugmentedMatrix covariance_;
   Diagnostics diagnostics_;
   bool hasPropagatedPoints_ = false;
+  bool boundsActive_ = false;
   // Workspace: results are computed here and committed only when the whole step succeeded.
   AugmentedState candidateAugmented_;
   AugmentedMatrix candidateCovariance_;

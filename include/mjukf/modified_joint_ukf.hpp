@@ -8,13 +8,16 @@
 
 #include <Eigen/Core>
 
+#include "mjukf/covariance_repair.hpp"
 #include "mjukf/detail/propagation.hpp"
 #include "mjukf/detail/time_stepping.hpp"
 #include "mjukf/detail/unscented_core.hpp"
 #include "mjukf/detail/validation.hpp"
 #include "mjukf/diagnostics.hpp"
 #include "mjukf/integrators/i_tr_bdf2.hpp"
+#include "mjukf/measurement_gating.hpp"
 #include "mjukf/model.hpp"
+#include "mjukf/parameter_bounds.hpp"
 #include "mjukf/sigma_points.hpp"
 #include "mjukf/status.hpp"
 
@@ -43,6 +46,13 @@ struct ModifiedJointUkfSettings {
   Transformation transformation = Transformation::Zero();
   /// p_θ of eq. 8: the spacing of the initial per-point parameters θᵢ around θ̂₀.
   Param parameterSpread = Param::Zero();
+  /// What a step does with a covariance that is not positive definite before committing it
+  /// (covariance_repair.hpp): by default, mend rounding-level losses and refuse the rest.
+  CovarianceRepair<Scalar> repair;
+  /// The innovation gate of the measurement update (measurement_gating.hpp); off by default.
+  MeasurementGate<Scalar, Model::MeasDim> gate;
+  /// Box bounds on the estimated parameters (parameter_bounds.hpp); off by default.
+  ParameterBounds<Scalar, Model::ParamDim> parameterBounds;
 };
 
 /// Modified joint unscented Kalman filter. Sigma points are drawn for the state alone (L = n, 2n + 1
@@ -96,10 +106,16 @@ class ModifiedJointUkf : public detail::TimeStepping<ModifiedJointUkf<Model_, In
     const Scalar tolerance = Scalar(1000) * Eigen::NumTraits<Scalar>::epsilon() * Scalar(MeasDim);
     if ((rowSums.array() - Scalar(1)).abs().maxCoeff() > tolerance)
       detail::throwInvalid(owner, "transformation (T)", "must have rows that each sum to 1");
+    detail::validateRepair(owner, settings.repair);
+    detail::validateGate(owner, settings.gate);
+    detail::validateBounds(owner, settings.parameterBounds, initialParameters);
+    boundsActive_ = settings.parameterBounds.active();
     // Eq. 8: θᵢ = θ̂₀ − p_θ (n + 1) + p_θ (i + 1), i = 0 … 2n; their mean is θ̂₀.
     for (int i = 0; i < SigmaPointCount; ++i)
       parameterPoints_.col(i) = initialParameters - settings.parameterSpread * Scalar(StateDim + 1) +
                                 settings.parameterSpread * Scalar(i + 1);
+    if (boundsActive_)
+      for (int i = 0; i < SigmaPointCount; ++i) settings.parameterBounds.clamp(parameterPoints_.col(i));
   }
 
   /// Measurement update: the state as in algorithms.md §3, then the parameters (eqs. 9–10):
@@ -109,36 +125,16 @@ class ModifiedJointUkf : public detail::TimeStepping<ModifiedJointUkf<Model_, In
   /// with Yᵢ = g(χᵢ⁺, θᵢ) and θ̂ the estimate before this update. Uses the sigma points of the last
   /// time update as they are (see `redrawPointsForUpdate`); if the filter has none, it draws them from
   /// the current mean and covariance, paired with the θᵢ in order.
-  Status measurementUpdate(const Meas& y) {
-    if (!y.allFinite()) return Status::NonFiniteMeasurement;
-    const bool drawPoints = settings_.redrawPointsForUpdate || !hasPropagatedPoints_;
-    if (drawPoints)
-      if (const Status s = core_.draw(state_, covariance_); s != Status::Ok) return s;
-    const auto& points = drawPoints ? core_.workPoints() : core_.points();
-    auto& measured = core_.measuredPoints();
-    for (int i = 0; i < SigmaPointCount; ++i)  // Yᵢ = g(χᵢ⁺, θᵢ)
-      measured.col(i) = model_.measurement(points.col(i), parameterPoints_.col(i));
-    if (const Status s = core_.correct(points, state_, covariance_, y, settings_.measurementNoise,
-                                       candidateState_, candidateCovariance_, candidateDiagnostics_);
-        s != Status::Ok)
-      return s;
-    for (int i = 0; i < SigmaPointCount; ++i) {  // eq. 9
-      measurementError_ = y - measured.col(i);
-      candidateParameterPoints_.col(i) = parameters_;
-      candidateParameterPoints_.col(i).noalias() -= settings_.scaling * settings_.transformation * measurementError_;
-    }
-    candidateParameters_ = candidateParameterPoints_.rowwise().sum() / Scalar(SigmaPointCount);  // eq. 10
-    if (!candidateState_.allFinite() || !candidateCovariance_.allFinite() ||
-        !candidateParameterPoints_.allFinite() || !candidateParameters_.allFinite())
-      return Status::NonFiniteResult;
-    state_ = candidateState_;
-    covariance_ = candidateCovariance_;
-    parameters_ = candidateParameters_;
-    parameterPoints_ = candidateParameterPoints_;
-    diagnostics_ = candidateDiagnostics_;
-    hasPropagatedPoints_ = false;
-    return Status::Ok;
-  }
+  ///
+  /// Returns Ok or Repaired when the update was committed (the covariance is symmetrised and checked
+  /// before it is), MeasurementRejected when the gate refused it, or another refusal.
+  Status measurementUpdate(const Meas& y) { return update(y, nullptr); }
+
+  /// Measurement update with only the components where `present` is true (missing channels; the
+  /// others, NaN included, are ignored): exactly the update of the model reduced to those components,
+  /// with R reduced likewise and, in eq. 9, T reduced to the columns present with each row rescaled to
+  /// sum to 1 again (eq. 14); a row with no weight on any present component leaves its parameter at θ̂.
+  Status measurementUpdate(const Meas& y, const MeasurementMask<MeasDim>& present) { return update(y, &present); }
 
   const State& state() const { return state_; }
   const StateMatrix& covariance() const { return covariance_; }
@@ -155,6 +151,55 @@ class ModifiedJointUkf : public detail::TimeStepping<ModifiedJointUkf<Model_, In
   const Settings& settings() const { return settings_; }
 
  private:
+  Status update(const Meas& y, const MeasurementMask<MeasDim>* present) {
+    if (!detail::presentComponentsFinite(y, present)) return Status::NonFiniteMeasurement;
+    const bool drawPoints = settings_.redrawPointsForUpdate || !hasPropagatedPoints_;
+    if (drawPoints)
+      if (const Status s = core_.draw(state_, covariance_); s != Status::Ok) return s;
+    const auto& points = drawPoints ? core_.workPoints() : core_.points();
+    auto& measured = core_.measuredPoints();
+    for (int i = 0; i < SigmaPointCount; ++i)  // Yᵢ = g(χᵢ⁺, θᵢ)
+      measured.col(i) = model_.measurement(points.col(i), parameterPoints_.col(i));
+    if (const Status s = core_.correct(points, state_, covariance_, y, settings_.measurementNoise, present,
+                                       settings_.gate, candidateState_, candidateCovariance_, candidateDiagnostics_);
+        s != Status::Ok)
+      return s;
+    if (present) reducedTransformation(*present);
+    const Transformation& transformation = present ? maskedTransformation_ : settings_.transformation;
+    for (int i = 0; i < SigmaPointCount; ++i) {  // eq. 9
+      measurementError_ = y - measured.col(i);
+      if (present)  // a missing y(j) may be NaN: overwrite, never multiply by a zero column of T
+        for (int j = 0; j < MeasDim; ++j)
+          if (!(*present)(j)) measurementError_(j) = Scalar(0);
+      candidateParameterPoints_.col(i) = parameters_;
+      candidateParameterPoints_.col(i).noalias() -= settings_.scaling * transformation * measurementError_;
+      if (boundsActive_) settings_.parameterBounds.clamp(candidateParameterPoints_.col(i));
+    }
+    candidateParameters_ = candidateParameterPoints_.rowwise().sum() / Scalar(SigmaPointCount);  // eq. 10
+    if (!candidateState_.allFinite() || !candidateParameterPoints_.allFinite() || !candidateParameters_.allFinite())
+      return Status::NonFiniteResult;
+    const Status settled = core_.settle(candidateCovariance_, settings_.repair);
+    if (!taken(settled)) return settled;
+    state_ = candidateState_;
+    covariance_ = candidateCovariance_;
+    parameters_ = candidateParameters_;
+    parameterPoints_ = candidateParameterPoints_;
+    diagnostics_ = candidateDiagnostics_;
+    hasPropagatedPoints_ = false;
+    return settled;
+  }
+
+  // T with the columns of missing components zeroed and each row rescaled to sum to 1 (eq. 14).
+  void reducedTransformation(const MeasurementMask<MeasDim>& present) {
+    for (int r = 0; r < ParamDim; ++r) {
+      Scalar sum = 0;
+      for (int j = 0; j < MeasDim; ++j)
+        if (present(j)) sum += settings_.transformation(r, j);
+      for (int j = 0; j < MeasDim; ++j)
+        maskedTransformation_(r, j) = present(j) && sum != Scalar(0) ? settings_.transformation(r, j) / sum : Scalar(0);
+    }
+  }
+
   template <class InputSource>
   Status timeUpdateWith(const InputSource& input, Scalar t, Scalar h, int steps) {
     if (const Status s = detail::checkStep(t, h, steps); s != Status::Ok) return s;
@@ -166,12 +211,14 @@ class ModifiedJointUkf : public detail::TimeStepping<ModifiedJointUkf<Model_, In
     }
     if (!points.allFinite()) return Status::NonFiniteResult;
     core_.predict(settings_.processNoise, candidateState_, candidateCovariance_);
-    if (!candidateState_.allFinite() || !candidateCovariance_.allFinite()) return Status::NonFiniteResult;
+    if (!candidateState_.allFinite()) return Status::NonFiniteResult;
+    const Status settled = core_.settle(candidateCovariance_, settings_.repair);
+    if (!taken(settled)) return settled;
     core_.commitPoints();
     state_ = candidateState_;
     covariance_ = candidateCovariance_;
     hasPropagatedPoints_ = true;
-    return Status::Ok;
+    return settled;
   }
 
   template <class InputSource>
@@ -194,12 +241,14 @@ class ModifiedJointUkf : public detail::TimeStepping<ModifiedJointUkf<Model_, In
   ParamPoints parameterPoints_;  // θᵢ
   Diagnostics diagnostics_;
   bool hasPropagatedPoints_ = false;
+  bool boundsActive_ = false;
   // Workspace: results are computed here and committed only when the whole step succeeded.
   State candidateState_;
   StateMatrix candidateCovariance_;
   Param candidateParameters_;
   ParamPoints candidateParameterPoints_;
   Meas measurementError_;
+  Transformation maskedTransformation_;
   Diagnostics candidateDiagnostics_;
 };
 

@@ -12,10 +12,13 @@
 namespace mjukf {
 
 /// Where a scheduled run stopped: Status::Ok after the last row, otherwise the status of the refused
-/// step and the row whose estimate it would have produced.
+/// step and the row whose estimate it would have produced; and how many steps were taken with a
+/// repaired covariance and how many measurements the gate rejected on the way.
 struct ScheduleOutcome {
   Status status = Status::Ok;
   long row = 0;
+  long repairs = 0;   ///< steps that returned Status::Repaired (taken)
+  long rejected = 0;  ///< measurement updates that returned Status::MeasurementRejected
 };
 
 /// Drives `filter` over data rows k = 0 … rows − 1 at t_k = k h, the way the paper's experiments do:
@@ -24,27 +27,44 @@ struct ScheduleOutcome {
 /// mean alone is propagated open loop and P is left as it is.
 ///
 /// `record(k, filter)` is called for every row: row 0 holds the initial estimate and the estimate
-/// after step k belongs to row k + 1. The run stops at the first refused step.
+/// after step k belongs to row k + 1. The run goes on after a step taken with a repaired covariance
+/// and after a measurement the gate rejected (the time update before it stands; both are counted),
+/// and stops at the first other refused step.
 template <class Filter, class MeasurementAt, class Record>
 ScheduleOutcome runPaperSchedule(Filter& filter, long rows, typename Filter::Scalar h, int measurementEvery,
                                  MeasurementAt&& measurementAt, Record&& record) {
   using Scalar = typename Filter::Scalar;
-  if (rows < 1) return {Status::Ok, 0};
-  if (measurementEvery < 1) return {Status::InvalidStepSize, 0};
+  ScheduleOutcome outcome;
+  if (rows < 1) return outcome;
+  if (measurementEvery < 1) {
+    outcome.status = Status::InvalidStepSize;
+    return outcome;
+  }
+  // Counts a taken-with-repair or gated step and says whether the run goes on.
+  const auto goesOn = [&outcome](Status s) {
+    outcome.repairs += s == Status::Repaired;
+    outcome.rejected += s == Status::MeasurementRejected;
+    return taken(s) || s == Status::MeasurementRejected;
+  };
   record(0L, static_cast<const Filter&>(filter));
   for (long k = 0; k + 1 < rows; ++k) {
     const Scalar t = Scalar(k) * h;
     Status status;
     if ((k + 1) % measurementEvery == 0) {
       status = filter.timeUpdate(t, h);
-      if (status == Status::Ok) status = filter.measurementUpdate(measurementAt(k + 1));
+      if (goesOn(status)) status = filter.measurementUpdate(measurementAt(k + 1));
     } else {
       status = filter.propagateMean(t, h);
     }
-    if (status != Status::Ok) return {status, k + 1};
+    if (!goesOn(status)) {
+      outcome.status = status;
+      outcome.row = k + 1;
+      return outcome;
+    }
     record(k + 1, static_cast<const Filter&>(filter));
   }
-  return {Status::Ok, rows - 1};
+  outcome.row = rows - 1;
+  return outcome;
 }
 
 /// Root-mean-square error of a parameter vector against its truth, accumulated row by row (eq. 16).

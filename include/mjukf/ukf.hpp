@@ -5,12 +5,14 @@
 
 #include <Eigen/Core>
 
+#include "mjukf/covariance_repair.hpp"
 #include "mjukf/detail/propagation.hpp"
 #include "mjukf/detail/time_stepping.hpp"
 #include "mjukf/detail/unscented_core.hpp"
 #include "mjukf/detail/validation.hpp"
 #include "mjukf/diagnostics.hpp"
 #include "mjukf/integrators/i_tr_bdf2.hpp"
+#include "mjukf/measurement_gating.hpp"
 #include "mjukf/model.hpp"
 #include "mjukf/sigma_points.hpp"
 #include "mjukf/status.hpp"
@@ -31,6 +33,11 @@ struct UkfSettings {
   /// P_xy and P_yy leave Q out. true: it draws new points from (x̂⁻, P⁻), which costs one more
   /// Cholesky factorisation and makes the filter the textbook Kalman filter on linear models.
   bool redrawPointsForUpdate = false;
+  /// What a step does with a covariance that is not positive definite before committing it
+  /// (covariance_repair.hpp): by default, mend rounding-level losses and refuse the rest.
+  CovarianceRepair<Scalar> repair;
+  /// The innovation gate of the measurement update (measurement_gating.hpp); off by default.
+  MeasurementGate<Scalar, Model::MeasDim> gate;
 };
 
 /// Unscented Kalman filter of the state of `Model`, whose parameters are known and fixed.
@@ -68,6 +75,8 @@ class Ukf : public detail::TimeStepping<Ukf<Model_, Integrator_>, Model_> {
         state_(initialState), covariance_(settings.initialCovariance), parameters_(parameters) {
     constexpr const char* owner = "mjukf::Ukf";
     detail::validateNoiseSettings(owner, settings);
+    detail::validateRepair(owner, settings.repair);
+    detail::validateGate(owner, settings.gate);
     detail::requireFinite(owner, "initialState", initialState);
     detail::requireFinite(owner, "parameters", parameters);
   }
@@ -75,27 +84,15 @@ class Ukf : public detail::TimeStepping<Ukf<Model_, Integrator_>, Model_> {
   /// Measurement update, algorithms.md §3 (Algorithm 1 of the paper). Uses the sigma points of the
   /// last time update as they are (see `redrawPointsForUpdate`); if the filter has none (no time update
   /// since the last update or open-loop propagation), it draws them from the current mean and covariance.
-  Status measurementUpdate(const Meas& y) {
-    if (!y.allFinite()) return Status::NonFiniteMeasurement;
-    // The points of the last time update, or, when there are none, points drawn from the current
-    // mean and covariance into the workspace.
-    const bool drawPoints = settings_.redrawPointsForUpdate || !hasPropagatedPoints_;
-    if (drawPoints)
-      if (const Status s = core_.draw(state_, covariance_); s != Status::Ok) return s;
-    const auto& points = drawPoints ? core_.workPoints() : core_.points();
-    for (int i = 0; i < SigmaPointCount; ++i)
-      core_.measuredPoints().col(i) = model_.measurement(points.col(i), parameters_);  // Yᵢ = g(χᵢ⁺)
-    if (const Status s = core_.correct(points, state_, covariance_, y, settings_.measurementNoise,
-                                       candidateState_, candidateCovariance_, candidateDiagnostics_);
-        s != Status::Ok)
-      return s;
-    if (!candidateState_.allFinite() || !candidateCovariance_.allFinite()) return Status::NonFiniteResult;
-    state_ = candidateState_;
-    covariance_ = candidateCovariance_;
-    diagnostics_ = candidateDiagnostics_;
-    hasPropagatedPoints_ = false;
-    return Status::Ok;
-  }
+  ///
+  /// Returns Ok or Repaired when the update was committed (the covariance is symmetrised and checked
+  /// before it is), MeasurementRejected when the gate refused it, or another refusal.
+  Status measurementUpdate(const Meas& y) { return update(y, nullptr); }
+
+  /// Measurement update with only the components where `present` is true (missing channels; the
+  /// others, NaN included, are ignored): exactly the update of the model reduced to those components,
+  /// with R reduced likewise. A mask with nothing present leaves the estimate as it was.
+  Status measurementUpdate(const Meas& y, const MeasurementMask<MeasDim>& present) { return update(y, &present); }
 
   const State& state() const { return state_; }
   const StateMatrix& covariance() const { return covariance_; }
@@ -110,6 +107,30 @@ class Ukf : public detail::TimeStepping<Ukf<Model_, Integrator_>, Model_> {
   const Settings& settings() const { return settings_; }
 
  private:
+  Status update(const Meas& y, const MeasurementMask<MeasDim>* present) {
+    if (!detail::presentComponentsFinite(y, present)) return Status::NonFiniteMeasurement;
+    // The points of the last time update, or, when there are none, points drawn from the current
+    // mean and covariance into the workspace.
+    const bool drawPoints = settings_.redrawPointsForUpdate || !hasPropagatedPoints_;
+    if (drawPoints)
+      if (const Status s = core_.draw(state_, covariance_); s != Status::Ok) return s;
+    const auto& points = drawPoints ? core_.workPoints() : core_.points();
+    for (int i = 0; i < SigmaPointCount; ++i)
+      core_.measuredPoints().col(i) = model_.measurement(points.col(i), parameters_);  // Yᵢ = g(χᵢ⁺)
+    if (const Status s = core_.correct(points, state_, covariance_, y, settings_.measurementNoise, present,
+                                       settings_.gate, candidateState_, candidateCovariance_, candidateDiagnostics_);
+        s != Status::Ok)
+      return s;
+    if (!candidateState_.allFinite()) return Status::NonFiniteResult;
+    const Status settled = core_.settle(candidateCovariance_, settings_.repair);
+    if (!taken(settled)) return settled;
+    state_ = candidateState_;
+    covariance_ = candidateCovariance_;
+    diagnostics_ = candidateDiagnostics_;
+    hasPropagatedPoints_ = false;
+    return settled;
+  }
+
   template <class InputSource>
   Status timeUpdateWith(const InputSource& input, Scalar t, Scalar h, int steps) {
     if (const Status s = detail::checkStep(t, h, steps); s != Status::Ok) return s;
@@ -119,12 +140,14 @@ class Ukf : public detail::TimeStepping<Ukf<Model_, Integrator_>, Model_> {
       points.col(i) = detail::propagate(model_, integrator_, input, parameters_, t, h, steps, points.col(i));
     if (!points.allFinite()) return Status::NonFiniteResult;
     core_.predict(settings_.processNoise, candidateState_, candidateCovariance_);
-    if (!candidateState_.allFinite() || !candidateCovariance_.allFinite()) return Status::NonFiniteResult;
+    if (!candidateState_.allFinite()) return Status::NonFiniteResult;
+    const Status settled = core_.settle(candidateCovariance_, settings_.repair);
+    if (!taken(settled)) return settled;
     core_.commitPoints();
     state_ = candidateState_;
     covariance_ = candidateCovariance_;
     hasPropagatedPoints_ = true;
-    return Status::Ok;
+    return settled;
   }
 
   template <class InputSource>

@@ -5,10 +5,14 @@
 // say how a point is propagated and measured. Every result goes to an output argument so that a filter
 // can check it before committing it (the strong guarantee of the failure policy).
 
+#include <cmath>
+
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 
+#include "mjukf/covariance_repair.hpp"
 #include "mjukf/diagnostics.hpp"
+#include "mjukf/measurement_gating.hpp"
 #include "mjukf/sigma_points.hpp"
 #include "mjukf/status.hpp"
 #include "mjukf/unscented_transform.hpp"
@@ -28,6 +32,8 @@ class UnscentedCore {
   using MeasPoints = Eigen::Matrix<Scalar, M, Count>;
   using Gain = Eigen::Matrix<Scalar, L, M>;
   using Diagnostics = UpdateDiagnostics<Scalar, M>;
+  using Mask = MeasurementMask<M>;
+  using Gate = MeasurementGate<Scalar, M>;
 
   explicit UnscentedCore(const SigmaPointParameters<Scalar>& parameters) : sigmaPoints_(parameters) {}
 
@@ -44,9 +50,13 @@ class UnscentedCore {
 
   /// §3, from `points` about `predictedMean` and their images measuredPoints(): writes the corrected
   /// mean and covariance and the diagnostics. The inputs are left untouched; on a status other than Ok
-  /// the outputs are unspecified.
+  /// the outputs are unspecified. With `present` (may be null: all present), the missing components
+  /// get zero rows and columns in P_yy (one on its diagonal), in P_xy and in the innovation: the gain
+  /// then has zero columns there and the update is exactly that of the reduced model. `gate` refuses
+  /// an update whose NIS exceeds its threshold, before anything is computed from the gain.
   Status correct(const Points& points, const Vector& predictedMean, const Matrix& predictedCov, const MeasVector& y,
-                 const MeasMatrix& measurementNoise, Vector& mean, Matrix& cov, Diagnostics& diagnostics) {
+                 const MeasMatrix& measurementNoise, const Mask* present, const Gate& gate, Vector& mean,
+                 Matrix& cov, Diagnostics& diagnostics) {
     if (!measuredPoints_.allFinite()) return Status::NonFiniteResult;  // the model's g gave NaN or Inf
     MeasVector predictedMeasurement;
     unscentedMean(measuredPoints_, sigmaPoints_.meanWeights(), predictedMeasurement);  // ŷ
@@ -55,26 +65,46 @@ class UnscentedCore {
     weightedOuterSum(measurementDeviations_, measurementDeviations_, diagnostics.innovationCovariance);
     diagnostics.innovationCovariance += measurementNoise;  // P_yy
     weightedOuterSum(stateDeviations_, measurementDeviations_, crossCovariance_);  // P_xy
+    diagnostics.innovation = y - predictedMeasurement;
+    int presentCount = M;
+    if (present) {
+      for (int j = 0; j < M; ++j) {
+        if ((*present)(j)) continue;
+        diagnostics.innovationCovariance.row(j).setZero();
+        diagnostics.innovationCovariance.col(j).setZero();
+        diagnostics.innovationCovariance(j, j) = Scalar(1);
+        crossCovariance_.col(j).setZero();
+        diagnostics.innovation(j) = Scalar(0);  // y(j) may be NaN: overwrite, never multiply by 0
+        --presentCount;
+      }
+    }
 
     innovationLlt_.compute(diagnostics.innovationCovariance);
     if (!diagnostics.innovationCovariance.allFinite() || innovationLlt_.info() != Eigen::Success)
       return Status::InnovationNotPositiveDefinite;
+    // NIS = νᵀ P_yy⁻¹ ν = |S⁻¹ ν|² with P_yy = S Sᵀ.
+    MeasVector whitened = diagnostics.innovation;
+    solveLower(whitened);
+    diagnostics.nis = whitened.squaredNorm();
+    // An innovation or NIS that overflowed (a model returning huge values) is no measurement to use,
+    // even when the gain is zero.
+    if (!std::isfinite(diagnostics.nis) || !diagnostics.innovation.allFinite()) return Status::NonFiniteResult;
+    if (presentCount > 0 && diagnostics.nis > gate.nisThreshold(presentCount - 1)) return Status::MeasurementRejected;
     // K = P_xy P_yy⁻¹, as Kᵀ = P_yy⁻¹ P_xyᵀ with the Cholesky factor (P_yy is symmetric).
     gainTransposed_ = crossCovariance_.transpose();
     solveLower(gainTransposed_);
     solveUpper(gainTransposed_);
-    diagnostics.innovation = y - predictedMeasurement;
     mean = predictedMean;
     mean.noalias() += gainTransposed_.transpose() * diagnostics.innovation;
     // P = P⁻ − K P_yy Kᵀ = P⁻ − P_xy Kᵀ
     cov = predictedCov;
     cov.noalias() -= crossCovariance_ * gainTransposed_;
-    // NIS = νᵀ P_yy⁻¹ ν = |S⁻¹ ν|² with P_yy = S Sᵀ.
-    MeasVector whitened = diagnostics.innovation;
-    solveLower(whitened);
-    diagnostics.nis = whitened.squaredNorm();
     return Status::Ok;
   }
+
+  /// What every step does with the covariance it is about to commit: symmetrise it, check it has a
+  /// Cholesky factor, repair it if not (covariance_repair.hpp). Ok, Repaired, or a refusal.
+  Status settle(Matrix& cov, const CovarianceRepair<Scalar>& repair) { return guard_.settle(cov, repair); }
 
   /// Makes the work points the filter's points, once the step that made them has succeeded.
   void commitPoints() { points_ = workPoints_; }
@@ -123,6 +153,7 @@ class UnscentedCore {
   Gain crossCovariance_;          // P_xy
   Eigen::Matrix<Scalar, M, L> gainTransposed_;  // Kᵀ
   Eigen::LLT<MeasMatrix> innovationLlt_;
+  CovarianceGuard<Scalar, L> guard_;
 };
 
 }  // namespace mjukf::detail

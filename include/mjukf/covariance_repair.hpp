@@ -1,0 +1,90 @@
+#pragma once
+
+/// \file
+/// What a filter does with a covariance before committing it: symmetrise, check that it has a
+/// Cholesky factor, and, when it has none, a bounded repair (a small multiple of the identity).
+
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+
+#include "mjukf/detail/validation.hpp"
+#include "mjukf/status.hpp"
+
+namespace mjukf {
+
+/// The repair of a covariance that is not positive definite, applied to the P of every time and
+/// measurement update before it is committed (design.md, robustness.md).
+///
+/// With s = the mean of |Pᵢᵢ|, attempt k = 0 … maxAttempts − 1 factors P + s·firstJitter·growthᵏ·I;
+/// the first that has a Cholesky factor is committed and the step returns `Status::Repaired`. When
+/// none has one (or s is zero), the step is refused with `Status::NotPositiveDefinite` and nothing
+/// changes. The defaults add at most 16ε·10⁴ ≈ 3.6e-11 (double) of s: they mend a covariance that lost
+/// definiteness to rounding, and refuse one that is indefinite for a reason (bad sigma-point weights,
+/// a model that does not fit), which jitter would only hide.
+template <class Scalar>
+struct CovarianceRepair {
+  int maxAttempts = 3;  ///< 0 disables the repair: a P without a factor is always refused.
+  Scalar firstJitter = Scalar(16) * std::numeric_limits<Scalar>::epsilon();  ///< relative to mean |Pᵢᵢ|, > 0
+  Scalar growth = Scalar(100);  ///< factor between attempts, ≥ 1
+};
+
+namespace detail {
+
+template <class Scalar>
+void validateRepair(const char* owner, const CovarianceRepair<Scalar>& repair) {
+  if (repair.maxAttempts < 0 || repair.maxAttempts > 64)
+    throwInvalid(owner, "repair.maxAttempts", "must be in [0, 64]");
+  requireFinite(owner, "repair.firstJitter", repair.firstJitter);
+  requireFinite(owner, "repair.growth", repair.growth);
+  if (!(repair.firstJitter > 0)) throwInvalid(owner, "repair.firstJitter", "must be positive");
+  if (!(repair.growth >= 1)) throwInvalid(owner, "repair.growth", "must be >= 1");
+}
+
+// P ← (P + Pᵀ)/2 in place, a triangle at a time (no temporary, no aliasing).
+template <class Matrix>
+void symmetrize(Matrix& p) {
+  using Scalar = typename Matrix::Scalar;
+  for (int c = 0; c < p.cols(); ++c)
+    for (int r = c + 1; r < p.rows(); ++r) p(r, c) = p(c, r) = Scalar(0.5) * (p(r, c) + p(c, r));
+}
+
+// The check and repair of a covariance about to be committed; the workspace is a member, so it
+// allocates nothing.
+template <class Scalar, int L>
+class CovarianceGuard {
+ public:
+  using Matrix = Eigen::Matrix<Scalar, L, L>;
+
+  // Symmetrises `cov` and makes sure it has a Cholesky factor: Ok when it had one, Repaired when the
+  // repair gave it one (cov then holds the repaired matrix), NotPositiveDefinite or NonFiniteResult
+  // when it is refused (cov is then unspecified).
+  Status settle(Matrix& cov, const CovarianceRepair<Scalar>& repair) {
+    symmetrize(cov);
+    if (!cov.allFinite()) return Status::NonFiniteResult;
+    llt_.compute(cov);
+    if (llt_.info() == Eigen::Success) return Status::Ok;
+    const Scalar scale = cov.diagonal().cwiseAbs().mean();
+    if (!(scale > 0) || !std::isfinite(scale)) return Status::NotPositiveDefinite;
+    Scalar jitter = scale * repair.firstJitter;
+    for (int attempt = 0; attempt < repair.maxAttempts && std::isfinite(jitter); ++attempt, jitter *= repair.growth) {
+      candidate_ = cov;
+      candidate_.diagonal().array() += jitter;
+      llt_.compute(candidate_);
+      if (llt_.info() == Eigen::Success) {
+        cov = candidate_;
+        return Status::Repaired;
+      }
+    }
+    return Status::NotPositiveDefinite;
+  }
+
+ private:
+  Eigen::LLT<Matrix> llt_;
+  Matrix candidate_;
+};
+
+}  // namespace detail
+}  // namespace mjukf

@@ -1,0 +1,59 @@
+#pragma once
+
+/// \file
+/// Lower and upper bounds on the estimated parameters of `JointUkf` and `ModifiedJointUkf`.
+
+#include <limits>
+
+#include <Eigen/Core>
+
+#include "mjukf/detail/validation.hpp"
+
+namespace mjukf {
+
+/// Box bounds lower ≤ θ ≤ upper on the estimated parameters (off by default: ±∞).
+///
+/// Applied by clamping what a step commits, never the covariance:
+/// - JointUkf: the θ block of the mean after every time and measurement update is clamped; P is left
+///   as the update made it. P still describes the spread of the estimate, so sigma points drawn around
+///   a clamped mean can lie outside the box by up to γ·σ: use a model that is defined there, or a
+///   smaller P₀ and Q for that parameter.
+/// - ModifiedJointUkf: each per-point θᵢ is clamped after eq. 9 (every θᵢ is used to propagate a
+///   point, so every one must be valid), and θ̂ is their mean (eq. 10), which is then in the box too.
+///   The θᵢ of eq. 8 are clamped at construction.
+/// The initial parameters must lie in the box.
+template <class Scalar, int ParamDim>
+struct ParameterBounds {
+  using Param = Eigen::Matrix<Scalar, ParamDim, 1>;
+  Param lower = Param::Constant(-std::numeric_limits<Scalar>::infinity());  ///< no NaN
+  Param upper = Param::Constant(std::numeric_limits<Scalar>::infinity());   ///< ≥ lower, no NaN
+
+  /// True when some bound is finite (clamping does something).
+  bool active() const {
+    return (lower.array() > -std::numeric_limits<Scalar>::infinity()).any() ||
+           (upper.array() < std::numeric_limits<Scalar>::infinity()).any();
+  }
+  /// θ clamped to the box, in place.
+  template <class Derived>
+  void clamp(Eigen::MatrixBase<Derived>&& theta) const {
+    theta = theta.cwiseMax(lower).cwiseMin(upper);
+  }
+  template <class Derived>
+  void clamp(Eigen::MatrixBase<Derived>& theta) const {
+    theta = theta.cwiseMax(lower).cwiseMin(upper);
+  }
+};
+
+namespace detail {
+
+template <class Scalar, int ParamDim, class Initial>
+void validateBounds(const char* owner, const ParameterBounds<Scalar, ParamDim>& bounds, const Initial& initial) {
+  if (bounds.lower.hasNaN() || bounds.upper.hasNaN()) throwInvalid(owner, "parameterBounds", "must not be NaN");
+  if (!(bounds.lower.array() <= bounds.upper.array()).all())
+    throwInvalid(owner, "parameterBounds", "must have lower <= upper");
+  if (!(initial.array() >= bounds.lower.array()).all() || !(initial.array() <= bounds.upper.array()).all())
+    throwInvalid(owner, "initialParameters", "must lie within parameterBounds");
+}
+
+}  // namespace detail
+}  // namespace mjukf
