@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <limits>
 #include <new>
+#include <type_traits>
 
 #include <gtest/gtest.h>
 
@@ -100,6 +101,47 @@ TYPED_TEST(NoAllocation, PaperScheduleRun) {
   });
   EXPECT_EQ(count, 0);
   EXPECT_EQ(outcome.status, Status::Ok);
+}
+
+// The hardening paths: masked updates, gated (rejected) updates, active parameter bounds, and the
+// covariance repair.
+TYPED_TEST(NoAllocation, MaskingGatingBoundsAndRepair) {
+  const auto paper = TypeParam::make();
+  using Filter = std::decay_t<decltype(paper)>;
+  using Scalar = typename Filter::Scalar;
+  using Meas = typename Filter::Meas;
+  auto settings = paper.settings();
+  if constexpr (Filter::ParamDim > 0 && !std::is_same_v<Filter, mjukf::Ukf<typename Filter::Model,
+                                                                             typename Filter::Integrator>>) {
+    settings.parameterBounds.lower = paper.parameters() - Filter::Param::Constant(Scalar(1));
+    settings.parameterBounds.upper = paper.parameters() + Filter::Param::Constant(Scalar(1));
+  }
+  Filter bounded(paper.model(), paper.state(), paper.parameters(), settings);
+  settings.gate.nisThreshold.setConstant(Scalar(1e-30));  // rejects everything
+  Filter gated(paper.model(), paper.state(), paper.parameters(), settings);
+  Meas y = Meas::Constant(Scalar(0.01));
+  mjukf::MeasurementMask<Filter::MeasDim> present = mjukf::MeasurementMask<Filter::MeasDim>::Constant(true);
+  present(0) = false;
+  Meas withMissing = y;
+  withMissing(0) = std::numeric_limits<Scalar>::quiet_NaN();
+  const Scalar h = Scalar(1e-3);
+  mjukf::detail::CovarianceGuard<Scalar, 3> guard;
+  Eigen::Matrix<Scalar, 3, 3> rankOne = Eigen::Matrix<Scalar, 3, 1>(1, 2, 3) * Eigen::Matrix<Scalar, 1, 3>(1, 2, 3);
+  const mjukf::CovarianceRepair<Scalar> repair;
+  Status status[7];
+  const long count = allocationsDuring([&] {
+    status[0] = bounded.timeUpdate(Scalar(0), h);
+    status[1] = bounded.measurementUpdate(withMissing, present);
+    status[2] = bounded.timeUpdate(h, h);
+    status[3] = bounded.measurementUpdate(y);
+    status[4] = gated.timeUpdate(Scalar(0), h);
+    status[5] = gated.measurementUpdate(y);
+    status[6] = guard.settle(rankOne, repair);
+  });
+  EXPECT_EQ(count, 0) << "heap allocations in per-step calls";
+  for (int i : {0, 1, 2, 3, 4}) EXPECT_EQ(status[i], Status::Ok) << "call " << i;
+  EXPECT_EQ(status[5], Status::MeasurementRejected);
+  EXPECT_EQ(status[6], Status::Repaired);
 }
 
 // The witnesses work: an allocation inside the window is seen by both.

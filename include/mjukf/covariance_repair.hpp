@@ -72,6 +72,7 @@ class CovarianceGuard {
     for (int attempt = 0; attempt < repair.maxAttempts && std::isfinite(jitter); ++attempt, jitter *= repair.growth) {
       candidate_ = cov;
       candidate_.diagonal().array() += jitter;
+      if (!candidate_.allFinite()) break;  // a diagonal near the largest Scalar overflowed
       llt_.compute(candidate_);
       if (llt_.info() == Eigen::Success) {
         cov = candidate_;

@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <iterator>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <stdexcept>
@@ -62,7 +63,10 @@ void covariance(FuzzedDataProvider& in, M& m) {
   }
 }
 
-[[noreturn]] void fail() { __builtin_trap(); }
+[[noreturn]] void fail(const char* what) {
+  std::fprintf(stderr, "mjukf_fuzz: %s\n", what);
+  __builtin_trap();
+}
 
 template <class A>
 bool same(const A& a, const A& b) {
@@ -88,9 +92,11 @@ void check(const Filter& after, const Filter& before, mjukf::Status status) {
     case Status::Ok:
     case Status::Repaired: {
       const auto& p = after.covariance();
-      if (!after.state().allFinite() || !after.parameters().allFinite() || !p.allFinite()) fail();
-      if (!(p.array() == p.transpose().array()).all()) fail();
-      if (Eigen::LLT<typename std::decay_t<decltype(p)>::PlainObject>(p).info() != Eigen::Success) fail();
+      if (!after.state().allFinite() || !after.parameters().allFinite() || !p.allFinite())
+        fail("a taken step left a non-finite estimate or covariance");
+      if (!(p.array() == p.transpose().array()).all()) fail("a taken step left a covariance that is not symmetric");
+      if (Eigen::LLT<typename std::decay_t<decltype(p)>::PlainObject>(p).info() != Eigen::Success)
+        fail("a taken step left a covariance without a Cholesky factor");
       return;
     }
     case Status::NonFiniteMeasurement:
@@ -100,10 +106,10 @@ void check(const Filter& after, const Filter& before, mjukf::Status status) {
     case Status::InnovationNotPositiveDefinite:
     case Status::NonFiniteResult:
     case Status::MeasurementRejected:
-      if (!unchanged(after, before)) fail();
+      if (!unchanged(after, before)) fail("a refused call changed the filter");
       return;
   }
-  fail();  // not a Status value
+  fail("not a Status value");
 }
 
 template <class Filter>
