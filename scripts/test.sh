@@ -26,6 +26,7 @@ ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:ha
 if [ -f tests/fuzz/CMakeLists.txt ]; then
   cmake --preset fuzz -B "$build-fuzz"
   cmake --build "$build-fuzz" -j "$jobs"
-  # A short smoke run; docs/robustness.md records the long one.
+  # The inputs that once failed, then a short smoke run; docs/robustness.md records the long run.
+  "$build-fuzz"/tests/fuzz/mjukf_fuzz tests/fuzz/regressions/*
   "$build-fuzz"/tests/fuzz/mjukf_fuzz -runs=20000 -seed=1 -max_len=1024
 fi
