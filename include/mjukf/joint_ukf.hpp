@@ -89,6 +89,8 @@ class JointUkf : public detail::TimeStepping<JointUkf<Model_, Integrator_>, Mode
     boundsActive_ = settings.parameterBounds.active();
     augmented_.template head<StateDim>() = initialState;
     augmented_.template tail<ParamDim>() = initialParameters;
+
+    detail::symmetrize(covariance_);  // P₀ is symmetric to 1000ε; every committed P is exactly so
   }
 
   /// Measurement update, algorithms.md §3 on the augmented vector, g(z) = g(x, θ). Uses the sigma
