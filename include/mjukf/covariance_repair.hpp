@@ -51,6 +51,15 @@ void symmetrize(Matrix& p) {
     for (int r = c + 1; r < p.rows(); ++r) p(r, c) = p(c, r) = Scalar(0.5) * (p(r, c) + p(c, r));
 }
 
+// P₀ made exactly symmetric at construction, like every P a step commits, and checked to still have a
+// Cholesky factor (validation factored the lower triangle of the matrix as given).
+template <class Matrix>
+void symmetrizeInitialCovariance(const char* owner, Matrix& p0) {
+  symmetrize(p0);
+  if (Eigen::LLT<Matrix>(p0).info() != Eigen::Success)
+    throwInvalid(owner, "initialCovariance (P0)", "must be positive definite");
+}
+
 // The check and repair of a covariance about to be committed; the workspace is a member, so it
 // allocates nothing.
 template <class Scalar, int L>

@@ -90,7 +90,7 @@ class JointUkf : public detail::TimeStepping<JointUkf<Model_, Integrator_>, Mode
     augmented_.template head<StateDim>() = initialState;
     augmented_.template tail<ParamDim>() = initialParameters;
 
-    detail::symmetrize(covariance_);  // P₀ is symmetric to 1000ε; every committed P is exactly so
+    detail::symmetrizeInitialCovariance(owner, covariance_);  // every committed P is exactly symmetric
   }
 
   /// Measurement update, algorithms.md §3 on the augmented vector, g(z) = g(x, θ). Uses the sigma

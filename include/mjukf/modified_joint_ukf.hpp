@@ -110,7 +110,7 @@ class ModifiedJointUkf : public detail::TimeStepping<ModifiedJointUkf<Model_, In
     detail::validateGate(owner, settings.gate);
     detail::validateBounds(owner, settings.parameterBounds, initialParameters);
     boundsActive_ = settings.parameterBounds.active();
-    detail::symmetrize(covariance_);  // P₀ is symmetric to 1000ε; every committed P is exactly so
+    detail::symmetrizeInitialCovariance(owner, covariance_);  // every committed P is exactly symmetric
     // Eq. 8: θᵢ = θ̂₀ − p_θ (n + 1) + p_θ (i + 1), i = 0 … 2n; their mean is θ̂₀.
     for (int i = 0; i < SigmaPointCount; ++i)
       parameterPoints_.col(i) = initialParameters - settings.parameterSpread * Scalar(StateDim + 1) +

@@ -80,7 +80,7 @@ class Ukf : public detail::TimeStepping<Ukf<Model_, Integrator_>, Model_> {
     detail::requireFinite(owner, "initialState", initialState);
     detail::requireFinite(owner, "parameters", parameters);
 
-    detail::symmetrize(covariance_);  // P₀ is symmetric to 1000ε; every committed P is exactly so
+    detail::symmetrizeInitialCovariance(owner, covariance_);  // every committed P is exactly symmetric
   }
 
   /// Measurement update, algorithms.md §3 (Algorithm 1 of the paper). Uses the sigma points of the
