@@ -43,12 +43,14 @@ void validateRepair(const char* owner, const CovarianceRepair<Scalar>& repair) {
   if (!(repair.growth >= 1)) throwInvalid(owner, "repair.growth", "must be >= 1");
 }
 
-// P ← (P + Pᵀ)/2 in place, a triangle at a time (no temporary, no aliasing).
+// P ← (P + Pᵀ)/2 in place, a triangle at a time (no temporary, no aliasing). Halved before the sum,
+// which gives the same bits as halving after it (subnormal entries aside) but cannot overflow for
+// entries near the largest Scalar.
 template <class Matrix>
 void symmetrize(Matrix& p) {
   using Scalar = typename Matrix::Scalar;
   for (int c = 0; c < p.cols(); ++c)
-    for (int r = c + 1; r < p.rows(); ++r) p(r, c) = p(c, r) = Scalar(0.5) * (p(r, c) + p(c, r));
+    for (int r = c + 1; r < p.rows(); ++r) p(r, c) = p(c, r) = Scalar(0.5) * p(r, c) + Scalar(0.5) * p(c, r);
 }
 
 // P₀ made exactly symmetric at construction, like every P a step commits, and checked to still have a
