@@ -76,7 +76,9 @@ struct Snapshot {
   }
   // Bitwise equality, NaN included (a refused step must not even touch a NaN).
   static bool same(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
-    return a.size() == b.size() && std::memcmp(a.data(), b.data(), sizeof(double) * a.size()) == 0;
+    if (a.size() != b.size()) return false;
+    // An empty matrix (the UKF has no parameter points) has a null data(), which memcmp may not get.
+    return a.size() == 0 || std::memcmp(a.data(), b.data(), sizeof(double) * a.size()) == 0;
   }
   bool operator==(const Snapshot& o) const {
     return same(state, o.state) && same(covariance, o.covariance) && same(parameters, o.parameters) &&

@@ -7,9 +7,9 @@
 #include <cmath>
 #include <limits>
 
-#include <Eigen/Cholesky>
 #include <Eigen/Core>
 
+#include "mjukf/detail/cholesky.hpp"
 #include "mjukf/detail/validation.hpp"
 #include "mjukf/status.hpp"
 
@@ -54,16 +54,18 @@ void symmetrize(Matrix& p) {
 }
 
 // P₀ made exactly symmetric at construction, like every P a step commits, and checked to still have a
-// Cholesky factor (validation factored the lower triangle of the matrix as given).
+// Cholesky factor (validation factored the lower triangle of the matrix as given), which is written to
+// `factor`: the filter draws its first sigma points from it.
 template <class Matrix>
-void symmetrizeInitialCovariance(const char* owner, Matrix& p0) {
+void symmetrizeInitialCovariance(const char* owner, Matrix& p0, Matrix& factor) {
   symmetrize(p0);
-  if (Eigen::LLT<Matrix>(p0).info() != Eigen::Success)
+  if (!p0.allFinite() || !choleskyLower(p0, factor))
     throwInvalid(owner, "initialCovariance (P0)", "must be positive definite");
 }
 
 // The check and repair of a covariance about to be committed; the workspace is a member, so it
-// allocates nothing.
+// allocates nothing. The Cholesky factor of the covariance it accepted is kept (`factor()`): the
+// filter draws its next sigma points from it instead of factoring the same matrix again.
 template <class Scalar, int L>
 class CovarianceGuard {
  public:
@@ -71,12 +73,12 @@ class CovarianceGuard {
 
   // Symmetrises `cov` and makes sure it has a Cholesky factor: Ok when it had one, Repaired when the
   // repair gave it one (cov then holds the repaired matrix), NotPositiveDefinite or NonFiniteResult
-  // when it is refused (cov is then unspecified).
+  // when it is refused (cov and factor() are then unspecified). After Ok or Repaired, factor() is the
+  // lower Cholesky factor of cov as returned.
   Status settle(Matrix& cov, const CovarianceRepair<Scalar>& repair) {
     symmetrize(cov);
     if (!cov.allFinite()) return Status::NonFiniteResult;
-    llt_.compute(cov);
-    if (llt_.info() == Eigen::Success) return Status::Ok;
+    if (choleskyLower(cov, factor_)) return Status::Ok;
     const Scalar scale = cov.diagonal().cwiseAbs().mean();
     if (!(scale > 0) || !std::isfinite(scale)) return Status::NotPositiveDefinite;
     Scalar jitter = scale * repair.firstJitter;
@@ -84,8 +86,7 @@ class CovarianceGuard {
       candidate_ = cov;
       candidate_.diagonal().array() += jitter;
       if (!candidate_.allFinite()) break;  // a diagonal near the largest Scalar overflowed
-      llt_.compute(candidate_);
-      if (llt_.info() == Eigen::Success) {
+      if (choleskyLower(candidate_, factor_)) {
         cov = candidate_;
         return Status::Repaired;
       }
@@ -93,8 +94,10 @@ class CovarianceGuard {
     return Status::NotPositiveDefinite;
   }
 
+  const Matrix& factor() const { return factor_; }
+
  private:
-  Eigen::LLT<Matrix> llt_;
+  Matrix factor_;
   Matrix candidate_;
 };
 

@@ -90,7 +90,7 @@ class JointUkf : public detail::TimeStepping<JointUkf<Model_, Integrator_>, Mode
     augmented_.template head<StateDim>() = initialState;
     augmented_.template tail<ParamDim>() = initialParameters;
 
-    detail::symmetrizeInitialCovariance(owner, covariance_);  // every committed P is exactly symmetric
+    core_.adoptInitialCovariance(owner, covariance_);  // every committed P is exactly symmetric
   }
 
   /// Measurement update, algorithms.md §3 on the augmented vector, g(z) = g(x, θ). Uses the sigma
@@ -126,7 +126,7 @@ class JointUkf : public detail::TimeStepping<JointUkf<Model_, Integrator_>, Mode
     if (!detail::presentComponentsFinite(y, present)) return Status::NonFiniteMeasurement;
     const bool drawPoints = settings_.redrawPointsForUpdate || !hasPropagatedPoints_;
     if (drawPoints)
-      if (const Status s = core_.draw(augmented_, covariance_); s != Status::Ok) return s;
+      if (const Status s = core_.draw(augmented_); s != Status::Ok) return s;
     const auto& points = drawPoints ? core_.workPoints() : core_.points();
     for (int i = 0; i < SigmaPointCount; ++i)  // Yᵢ = g(xᵢ, θᵢ) of zᵢ = [xᵢ; θᵢ]
       core_.measuredPoints().col(i) = model_.measurement(points.col(i).template head<StateDim>(),
@@ -141,7 +141,7 @@ class JointUkf : public detail::TimeStepping<JointUkf<Model_, Integrator_>, Mode
     if (!taken(settled)) return settled;
     if (boundsActive_) settings_.parameterBounds.clamp(candidateAugmented_.template tail<ParamDim>());
     augmented_ = candidateAugmented_;
-    covariance_ = candidateCovariance_;
+    core_.commitCovariance(covariance_, candidateCovariance_);
     diagnostics_ = candidateDiagnostics_;
     hasPropagatedPoints_ = false;
     return settled;
@@ -150,7 +150,7 @@ class JointUkf : public detail::TimeStepping<JointUkf<Model_, Integrator_>, Mode
   template <class InputSource>
   Status timeUpdateWith(const InputSource& input, Scalar t, Scalar h, int steps) {
     if (const Status s = detail::checkStep(t, h, steps); s != Status::Ok) return s;
-    if (const Status s = core_.draw(augmented_, covariance_); s != Status::Ok) return s;
+    if (const Status s = core_.draw(augmented_); s != Status::Ok) return s;
     auto& points = core_.workPoints();
     for (int i = 0; i < SigmaPointCount; ++i) {  // [xᵢ; θᵢ]⁺ = [Φ_h(xᵢ; t, θᵢ); θᵢ]
       const Param theta = points.col(i).template tail<ParamDim>();
@@ -165,7 +165,7 @@ class JointUkf : public detail::TimeStepping<JointUkf<Model_, Integrator_>, Mode
     if (boundsActive_) settings_.parameterBounds.clamp(candidateAugmented_.template tail<ParamDim>());
     core_.commitPoints();
     augmented_ = candidateAugmented_;
-    covariance_ = candidateCovariance_;
+    core_.commitCovariance(covariance_, candidateCovariance_);
     hasPropagatedPoints_ = true;
     return settled;
   }

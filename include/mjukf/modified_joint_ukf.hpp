@@ -110,7 +110,7 @@ class ModifiedJointUkf : public detail::TimeStepping<ModifiedJointUkf<Model_, In
     detail::validateGate(owner, settings.gate);
     detail::validateBounds(owner, settings.parameterBounds, initialParameters);
     boundsActive_ = settings.parameterBounds.active();
-    detail::symmetrizeInitialCovariance(owner, covariance_);  // every committed P is exactly symmetric
+    core_.adoptInitialCovariance(owner, covariance_);  // every committed P is exactly symmetric
     // Eq. 8: θᵢ = θ̂₀ − p_θ (n + 1) + p_θ (i + 1), i = 0 … 2n; their mean is θ̂₀.
     for (int i = 0; i < SigmaPointCount; ++i)
       parameterPoints_.col(i) = initialParameters - settings.parameterSpread * Scalar(StateDim + 1) +
@@ -156,7 +156,7 @@ class ModifiedJointUkf : public detail::TimeStepping<ModifiedJointUkf<Model_, In
     if (!detail::presentComponentsFinite(y, present)) return Status::NonFiniteMeasurement;
     const bool drawPoints = settings_.redrawPointsForUpdate || !hasPropagatedPoints_;
     if (drawPoints)
-      if (const Status s = core_.draw(state_, covariance_); s != Status::Ok) return s;
+      if (const Status s = core_.draw(state_); s != Status::Ok) return s;
     const auto& points = drawPoints ? core_.workPoints() : core_.points();
     auto& measured = core_.measuredPoints();
     for (int i = 0; i < SigmaPointCount; ++i)  // Yᵢ = g(χᵢ⁺, θᵢ)
@@ -182,7 +182,7 @@ class ModifiedJointUkf : public detail::TimeStepping<ModifiedJointUkf<Model_, In
     const Status settled = core_.settle(candidateCovariance_, settings_.repair);
     if (!taken(settled)) return settled;
     state_ = candidateState_;
-    covariance_ = candidateCovariance_;
+    core_.commitCovariance(covariance_, candidateCovariance_);
     parameters_ = candidateParameters_;
     parameterPoints_ = candidateParameterPoints_;
     diagnostics_ = candidateDiagnostics_;
@@ -204,7 +204,7 @@ class ModifiedJointUkf : public detail::TimeStepping<ModifiedJointUkf<Model_, In
   template <class InputSource>
   Status timeUpdateWith(const InputSource& input, Scalar t, Scalar h, int steps) {
     if (const Status s = detail::checkStep(t, h, steps); s != Status::Ok) return s;
-    if (const Status s = core_.draw(state_, covariance_); s != Status::Ok) return s;
+    if (const Status s = core_.draw(state_); s != Status::Ok) return s;
     auto& points = core_.workPoints();
     for (int i = 0; i < SigmaPointCount; ++i) {  // χᵢ⁺ = Φ_h(χᵢ; t, θᵢ), each point with its own θᵢ
       const Param theta = parameterPoints_.col(i);
@@ -217,7 +217,7 @@ class ModifiedJointUkf : public detail::TimeStepping<ModifiedJointUkf<Model_, In
     if (!taken(settled)) return settled;
     core_.commitPoints();
     state_ = candidateState_;
-    covariance_ = candidateCovariance_;
+    core_.commitCovariance(covariance_, candidateCovariance_);
     hasPropagatedPoints_ = true;
     return settled;
   }

@@ -5,9 +5,9 @@
 
 #include <cmath>
 
-#include <Eigen/Cholesky>
 #include <Eigen/Core>
 
+#include "mjukf/detail/cholesky.hpp"
 #include "mjukf/detail/validation.hpp"
 #include "mjukf/status.hpp"
 
@@ -59,24 +59,30 @@ class MerweScaledSigmaPoints {
   }
 
   /// Writes the points of (mean, cov) into `points`: column 0 is the mean, columns 1…L and L+1…2L
-  /// are the mean plus and minus γ times the columns of the lower Cholesky factor of `cov`.
-  /// Returns Status::NotPositiveDefinite, with `points` untouched, when `cov` has no factor or is not
-  /// finite.
+  /// are the mean plus and minus γ times the columns of the lower Cholesky factor of `cov` (only its
+  /// lower triangle is read). Returns Status::NotPositiveDefinite, with `points` untouched, when `cov`
+  /// has no factor or is not finite.
   Status generate(const Vector& mean, const Matrix& cov, Points& points) {
-    if (!cov.allFinite() || !mean.allFinite()) return Status::NotPositiveDefinite;
-    llt_.compute(cov);
-    if (llt_.info() != Eigen::Success) return Status::NotPositiveDefinite;
-    points.col(0) = mean;
+    if (!cov.allFinite() || !detail::choleskyLower(cov, factor_)) return Status::NotPositiveDefinite;
+    return generateFromFactor(mean, factor_, points);
+  }
+
+  /// The same points from a lower Cholesky factor S of the covariance (cov = S Sᵀ) computed earlier:
+  /// a filter keeps the factor of the covariance it committed and draws from it without factoring
+  /// again. Only the lower triangle of S is read.
+  Status generateFromFactor(const Vector& mean, const Matrix& lowerFactor, Points& points) const {
+    if (!mean.allFinite()) return Status::NotPositiveDefinite;
     for (int i = 0; i < L; ++i) {
       // Columns of S, where cov = S Sᵀ (rows would be wrong for a correlated cov).
-      const auto column = llt_.matrixLLT().col(i);
       points.col(1 + i) = mean;
       points.col(1 + L + i) = mean;
       for (int r = i; r < L; ++r) {  // S is lower triangular: rows above the diagonal are zero.
-        points(r, 1 + i) += gamma_ * column(r);
-        points(r, 1 + L + i) -= gamma_ * column(r);
+        const Scalar offset = gamma_ * lowerFactor(r, i);
+        points(r, 1 + i) += offset;
+        points(r, 1 + L + i) -= offset;
       }
     }
+    points.col(0) = mean;
     return Status::Ok;
   }
 
@@ -92,7 +98,7 @@ class MerweScaledSigmaPoints {
   Scalar gamma_;
   Weights meanWeights_;
   Weights covarianceWeights_;
-  Eigen::LLT<Matrix> llt_;
+  Matrix factor_;  // workspace of generate()
 };
 
 }  // namespace mjukf

@@ -80,7 +80,7 @@ class Ukf : public detail::TimeStepping<Ukf<Model_, Integrator_>, Model_> {
     detail::requireFinite(owner, "initialState", initialState);
     detail::requireFinite(owner, "parameters", parameters);
 
-    detail::symmetrizeInitialCovariance(owner, covariance_);  // every committed P is exactly symmetric
+    core_.adoptInitialCovariance(owner, covariance_);  // every committed P is exactly symmetric
   }
 
   /// Measurement update, algorithms.md §3 (Algorithm 1 of the paper). Uses the sigma points of the
@@ -115,7 +115,7 @@ class Ukf : public detail::TimeStepping<Ukf<Model_, Integrator_>, Model_> {
     // mean and covariance into the workspace.
     const bool drawPoints = settings_.redrawPointsForUpdate || !hasPropagatedPoints_;
     if (drawPoints)
-      if (const Status s = core_.draw(state_, covariance_); s != Status::Ok) return s;
+      if (const Status s = core_.draw(state_); s != Status::Ok) return s;
     const auto& points = drawPoints ? core_.workPoints() : core_.points();
     for (int i = 0; i < SigmaPointCount; ++i)
       core_.measuredPoints().col(i) = model_.measurement(points.col(i), parameters_);  // Yᵢ = g(χᵢ⁺)
@@ -127,7 +127,7 @@ class Ukf : public detail::TimeStepping<Ukf<Model_, Integrator_>, Model_> {
     const Status settled = core_.settle(candidateCovariance_, settings_.repair);
     if (!taken(settled)) return settled;
     state_ = candidateState_;
-    covariance_ = candidateCovariance_;
+    core_.commitCovariance(covariance_, candidateCovariance_);
     diagnostics_ = candidateDiagnostics_;
     hasPropagatedPoints_ = false;
     return settled;
@@ -136,7 +136,7 @@ class Ukf : public detail::TimeStepping<Ukf<Model_, Integrator_>, Model_> {
   template <class InputSource>
   Status timeUpdateWith(const InputSource& input, Scalar t, Scalar h, int steps) {
     if (const Status s = detail::checkStep(t, h, steps); s != Status::Ok) return s;
-    if (const Status s = core_.draw(state_, covariance_); s != Status::Ok) return s;
+    if (const Status s = core_.draw(state_); s != Status::Ok) return s;
     auto& points = core_.workPoints();
     for (int i = 0; i < SigmaPointCount; ++i)  // χᵢ⁺ = Φ_h(χᵢ; t, θ)
       points.col(i) = detail::propagate(model_, integrator_, input, parameters_, t, h, steps, points.col(i));
@@ -147,7 +147,7 @@ class Ukf : public detail::TimeStepping<Ukf<Model_, Integrator_>, Model_> {
     if (!taken(settled)) return settled;
     core_.commitPoints();
     state_ = candidateState_;
-    covariance_ = candidateCovariance_;
+    core_.commitCovariance(covariance_, candidateCovariance_);
     hasPropagatedPoints_ = true;
     return settled;
   }

@@ -7,10 +7,10 @@
 
 #include <cmath>
 
-#include <Eigen/Cholesky>
 #include <Eigen/Core>
 
 #include "mjukf/covariance_repair.hpp"
+#include "mjukf/detail/cholesky.hpp"
 #include "mjukf/diagnostics.hpp"
 #include "mjukf/measurement_gating.hpp"
 #include "mjukf/sigma_points.hpp"
@@ -37,8 +37,19 @@ class UnscentedCore {
 
   explicit UnscentedCore(const SigmaPointParameters<Scalar>& parameters) : sigmaPoints_(parameters) {}
 
-  /// §1: draws the points of (mean, cov) into workPoints(), leaving points() as they are.
-  Status draw(const Vector& mean, const Matrix& cov) { return sigmaPoints_.generate(mean, cov, workPoints_); }
+  /// Symmetrises the filter's P₀ and keeps its Cholesky factor; throws, naming P₀, when it has none.
+  void adoptInitialCovariance(const char* owner, Matrix& p0) { symmetrizeInitialCovariance(owner, p0, committedFactor_); }
+
+  /// §1: draws the points of (mean, P) into workPoints(), leaving points() as they are, where P is
+  /// the covariance last committed with commitCovariance() (or adopted at construction): its Cholesky
+  /// factor is already known, so nothing is factored here.
+  Status draw(const Vector& mean) { return sigmaPoints_.generateFromFactor(mean, committedFactor_, workPoints_); }
+
+  /// `committed` ← `settled`, a covariance that settle() has just accepted, and its factor with it.
+  void commitCovariance(Matrix& committed, const Matrix& settled) {
+    committed = settled;
+    committedFactor_ = guard_.factor();
+  }
 
   /// §2: x̂⁻ = Σ Wmᵢ χᵢ⁺, P⁻ = Σ Wcᵢ (χᵢ⁺ − x̂⁻)(χᵢ⁺ − x̂⁻)ᵀ + Q, from the propagated workPoints().
   void predict(const Matrix& processNoise, Vector& mean, Matrix& cov) {
@@ -79,8 +90,8 @@ class UnscentedCore {
       }
     }
 
-    innovationLlt_.compute(diagnostics.innovationCovariance);
-    if (!diagnostics.innovationCovariance.allFinite() || innovationLlt_.info() != Eigen::Success)
+    if (!diagnostics.innovationCovariance.allFinite() ||
+        !choleskyLower(diagnostics.innovationCovariance, innovationFactor_))
       return Status::InnovationNotPositiveDefinite;
     // NIS = νᵀ P_yy⁻¹ ν = |S⁻¹ ν|² with P_yy = S Sᵀ.
     MeasVector whitened = diagnostics.innovation;
@@ -104,6 +115,7 @@ class UnscentedCore {
 
   /// What every step does with the covariance it is about to commit: symmetrise it, check it has a
   /// Cholesky factor, repair it if not (covariance_repair.hpp). Ok, Repaired, or a refusal.
+  /// Only a covariance accepted here may be committed, and only with commitCovariance().
   Status settle(Matrix& cov, const CovarianceRepair<Scalar>& repair) { return guard_.settle(cov, repair); }
 
   /// Makes the work points the filter's points, once the step that made them has succeeded.
@@ -129,7 +141,7 @@ class UnscentedCore {
   // (packing, level-3 kernels), which costs more than all the rest of the update at these sizes.
   template <class Rhs>
   void solveLower(Rhs& b) const {
-    const auto& s = innovationLlt_.matrixLLT();
+    const MeasMatrix& s = innovationFactor_;
     for (int i = 0; i < M; ++i) {
       for (int k = 0; k < i; ++k) b.row(i) -= s(i, k) * b.row(k);
       b.row(i) /= s(i, i);
@@ -137,7 +149,7 @@ class UnscentedCore {
   }
   template <class Rhs>
   void solveUpper(Rhs& b) const {
-    const auto& s = innovationLlt_.matrixLLT();
+    const MeasMatrix& s = innovationFactor_;
     for (int i = M - 1; i >= 0; --i) {
       for (int k = i + 1; k < M; ++k) b.row(i) -= s(k, i) * b.row(k);
       b.row(i) /= s(i, i);
@@ -152,8 +164,9 @@ class UnscentedCore {
   MeasPoints measurementDeviations_;  // Yᵢ − ŷ
   Gain crossCovariance_;          // P_xy
   Eigen::Matrix<Scalar, M, L> gainTransposed_;  // Kᵀ
-  Eigen::LLT<MeasMatrix> innovationLlt_;
+  MeasMatrix innovationFactor_;   // S with P_yy = S Sᵀ
   CovarianceGuard<Scalar, L> guard_;
+  Matrix committedFactor_;        // the Cholesky factor of the filter's committed P
 };
 
 }  // namespace mjukf::detail
