@@ -10,9 +10,9 @@
 #include <string>
 #include <type_traits>
 
-#include <Eigen/Cholesky>
 #include <Eigen/Core>
-#include <Eigen/Eigenvalues>
+
+#include "mjukf/detail/cholesky.hpp"
 
 namespace mjukf::detail {
 
@@ -44,21 +44,25 @@ void requireSymmetric(const char* owner, const char* setting, const Eigen::Matri
 template <class Derived>
 void requirePositiveDefinite(const char* owner, const char* setting, const Eigen::MatrixBase<Derived>& m) {
   requireSymmetric(owner, setting, m);
-  Eigen::LLT<typename Derived::PlainObject> llt(m);
-  if (llt.info() != Eigen::Success) throwInvalid(owner, setting, "must be positive definite");
+  typename Derived::PlainObject factor;
+  if (!choleskyLower(m.eval(), factor)) throwInvalid(owner, setting, "must be positive definite");
 }
 
 // Positive semi-definite: the smallest eigenvalue may be below zero only by rounding, relative to the
-// largest (a Q with zero rows is legal).
+// largest entry (a Q with zero rows is legal). Tested as "Q + δI has a Cholesky factor" with
+// δ = 1000ε max|Qᵢⱼ|, which holds exactly when λ_min(Q) > −δ: the rounding of the factorisation itself
+// (about Lε max|Qᵢⱼ|) is far below δ. The fixed-size Cholesky here instead of an eigen-solver keeps
+// the check cheap to compile for every filter size.
 template <class Derived>
 void requirePositiveSemiDefinite(const char* owner, const char* setting, const Eigen::MatrixBase<Derived>& m) {
   using Scalar = typename Derived::Scalar;
   requireSymmetric(owner, setting, m);
-  Eigen::SelfAdjointEigenSolver<typename Derived::PlainObject> eigen(m, Eigen::EigenvaluesOnly);
-  if (eigen.info() != Eigen::Success) throwInvalid(owner, setting, "must be positive semi-definite");
-  const Scalar largest = eigen.eigenvalues().cwiseAbs().maxCoeff();
-  if (eigen.eigenvalues().minCoeff() < -Scalar(1000) * std::numeric_limits<Scalar>::epsilon() * largest)
-    throwInvalid(owner, setting, "must be positive semi-definite");
+  const Scalar largest = m.cwiseAbs().maxCoeff();
+  if (largest == Scalar(0)) return;  // Q = 0
+  typename Derived::PlainObject shifted = m;
+  shifted.diagonal().array() += Scalar(1000) * std::numeric_limits<Scalar>::epsilon() * largest;
+  typename Derived::PlainObject factor;
+  if (!choleskyLower(shifted, factor)) throwInvalid(owner, setting, "must be positive semi-definite");
 }
 
 }  // namespace mjukf::detail
