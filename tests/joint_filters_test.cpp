@@ -1,6 +1,7 @@
 // JUKF (algorithms.md §4) and MJUKF (§5): model propagations per time update, and each filter checked
 // against an independent construction of the same step.
 
+#include <Eigen/LU>
 #include <gtest/gtest.h>
 
 #include "mjukf/joint_ukf.hpp"

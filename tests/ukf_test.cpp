@@ -3,6 +3,7 @@
 
 #include <random>
 
+#include <Eigen/LU>
 #include <gtest/gtest.h>
 
 #include "mjukf/integrators/i_tr_bdf2.hpp"

@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include <type_traits>
 
+#include <Eigen/Cholesky>
 #include <fuzzer/FuzzedDataProvider.h>
 
 #include "mjukf/joint_ukf.hpp"
