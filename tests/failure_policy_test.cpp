@@ -47,7 +47,7 @@ struct ToyModel {
 // Cholesky factor.
 struct CollapsingStepper {
   using Scalar = double;
-  static constexpr int order = 0, evaluationsPerStep = 0;
+  [[maybe_unused]] static constexpr int order = 0, evaluationsPerStep = 0;  // the stepper convention
   template <class F, class State>
   State step(F&&, double, const State&, double) const {
     return State::Zero();

@@ -67,7 +67,7 @@ TEST(JointFilters, TankPropagationsPerTimeUpdate) {
 // augmented model with θ̇ = 0 integrates exactly like the JUKF's split propagation.
 struct Euler {
   using Scalar = double;
-  static constexpr int order = 1, evaluationsPerStep = 1;
+  [[maybe_unused]] static constexpr int order = 1, evaluationsPerStep = 1;  // the stepper convention
   template <class F, class State>
   State step(F&& f, double t, const State& x, double h) const {
     return x + h * f(t, x);

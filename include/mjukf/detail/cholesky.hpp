@@ -15,20 +15,26 @@
 namespace mjukf::detail {
 
 // S with A = S Sᵀ, reading only the lower triangle of A (the strictly upper triangle of S is set to
-// zero). Returns false, S then unspecified, when a pivot is not positive and finite: A has no factor
-// (or holds NaN or Inf). `s` must not alias `a`.
+// zero). Returns false, S then unspecified, when A is not numerically positive definite: a pivot
+// a_jj − Σₖ s_jk² that is not above N ε a_jj, the size of its own rounding error, or not finite (NaN
+// and Inf fail). Without that margin a singular A (0.5 everywhere, say) can pass on a pivot of 1e-16
+// that is all rounding, and whether it passes then depends on the order of the sums: a P accepted here
+// must also factor in any other correct Cholesky (Eigen's LLT), which the fuzz target checks.
+// `s` must not alias `a`.
 template <class Scalar, int N>
 bool choleskyLower(const Eigen::Matrix<Scalar, N, N>& a, Eigen::Matrix<Scalar, N, N>& s) {
+  constexpr Scalar margin = Scalar(N) * std::numeric_limits<Scalar>::epsilon();
   for (int j = 0; j < N; ++j) {
-    Scalar pivot = a(j, j);
-    for (int k = 0; k < j; ++k) pivot -= s(j, k) * s(j, k);
-    if (!(pivot > Scalar(0)) || !(pivot <= std::numeric_limits<Scalar>::max())) return false;  // NaN fails too
+    Scalar sumOfSquares = 0;
+    for (int k = 0; k < j; ++k) sumOfSquares += s(j, k) * s(j, k);
+    const Scalar pivot = a(j, j) - sumOfSquares;
+    if (!(pivot > margin * a(j, j)) || !(pivot <= std::numeric_limits<Scalar>::max())) return false;
     const Scalar diagonal = std::sqrt(pivot);
     s(j, j) = diagonal;
     for (int i = j + 1; i < N; ++i) {
-      Scalar v = a(i, j);
-      for (int k = 0; k < j; ++k) v -= s(i, k) * s(j, k);
-      s(i, j) = v / diagonal;
+      Scalar dot = 0;
+      for (int k = 0; k < j; ++k) dot += s(i, k) * s(j, k);
+      s(i, j) = (a(i, j) - dot) / diagonal;
     }
     for (int i = 0; i < j; ++i) s(i, j) = Scalar(0);
   }
