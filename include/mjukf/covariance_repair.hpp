@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 
 #include "mjukf/detail/cholesky.hpp"
+#include "mjukf/detail/finite.hpp"
 #include "mjukf/detail/validation.hpp"
 #include "mjukf/status.hpp"
 
@@ -59,7 +60,7 @@ void symmetrize(Matrix& p) {
 template <class Matrix>
 void symmetrizeInitialCovariance(const char* owner, Matrix& p0, Matrix& factor) {
   symmetrize(p0);
-  if (!p0.allFinite() || !choleskyLower(p0, factor))
+  if (!allFinite(p0) || !choleskyLower(p0, factor))
     throwInvalid(owner, "initialCovariance (P0)", "must be positive definite");
 }
 
@@ -77,7 +78,7 @@ class CovarianceGuard {
   // lower Cholesky factor of cov as returned.
   Status settle(Matrix& cov, const CovarianceRepair<Scalar>& repair) {
     symmetrize(cov);
-    if (!cov.allFinite()) return Status::NonFiniteResult;
+    if (!allFinite(cov)) return Status::NonFiniteResult;
     if (choleskyLower(cov, factor_)) return Status::Ok;
     const Scalar scale = cov.diagonal().cwiseAbs().mean();
     if (!(scale > 0) || !std::isfinite(scale)) return Status::NotPositiveDefinite;
@@ -85,7 +86,7 @@ class CovarianceGuard {
     for (int attempt = 0; attempt < repair.maxAttempts && std::isfinite(jitter); ++attempt, jitter *= repair.growth) {
       candidate_ = cov;
       candidate_.diagonal().array() += jitter;
-      if (!candidate_.allFinite()) break;  // a diagonal near the largest Scalar overflowed
+      if (!allFinite(candidate_)) break;  // a diagonal near the largest Scalar overflowed
       if (choleskyLower(candidate_, factor_)) {
         cov = candidate_;
         return Status::Repaired;

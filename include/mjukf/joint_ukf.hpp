@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 
 #include "mjukf/covariance_repair.hpp"
+#include "mjukf/detail/finite.hpp"
 #include "mjukf/detail/propagation.hpp"
 #include "mjukf/detail/time_stepping.hpp"
 #include "mjukf/detail/unscented_core.hpp"
@@ -136,7 +137,7 @@ class JointUkf : public detail::TimeStepping<JointUkf<Model_, Integrator_>, Mode
                                        candidateDiagnostics_);
         s != Status::Ok)
       return s;
-    if (!candidateAugmented_.allFinite()) return Status::NonFiniteResult;
+    if (!detail::allFinite(candidateAugmented_)) return Status::NonFiniteResult;
     const Status settled = core_.settle(candidateCovariance_, settings_.repair);
     if (!taken(settled)) return settled;
     if (boundsActive_) settings_.parameterBounds.clamp(candidateAugmented_.template tail<ParamDim>());
@@ -157,9 +158,9 @@ class JointUkf : public detail::TimeStepping<JointUkf<Model_, Integrator_>, Mode
       points.col(i).template head<StateDim>() =
           detail::propagate(model_, integrator_, input, theta, t, h, steps, points.col(i).template head<StateDim>());
     }
-    if (!points.allFinite()) return Status::NonFiniteResult;
+    if (!detail::allFinite(points)) return Status::NonFiniteResult;
     core_.predict(settings_.processNoise, candidateAugmented_, candidateCovariance_);
-    if (!candidateAugmented_.allFinite()) return Status::NonFiniteResult;
+    if (!detail::allFinite(candidateAugmented_)) return Status::NonFiniteResult;
     const Status settled = core_.settle(candidateCovariance_, settings_.repair);
     if (!taken(settled)) return settled;
     if (boundsActive_) settings_.parameterBounds.clamp(candidateAugmented_.template tail<ParamDim>());
@@ -174,7 +175,7 @@ class JointUkf : public detail::TimeStepping<JointUkf<Model_, Integrator_>, Mode
   Status propagateMeanWith(const InputSource& input, Scalar t, Scalar h, int steps) {
     if (const Status s = detail::checkStep(t, h, steps); s != Status::Ok) return s;
     const State x = detail::propagate(model_, integrator_, input, parameters(), t, h, steps, state());
-    if (!x.allFinite()) return Status::NonFiniteResult;
+    if (!detail::allFinite(x)) return Status::NonFiniteResult;
     augmented_.template head<StateDim>() = x;
     hasPropagatedPoints_ = false;
     return Status::Ok;

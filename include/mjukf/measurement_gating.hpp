@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 
+#include "mjukf/detail/finite.hpp"
 #include "mjukf/detail/validation.hpp"
 
 namespace mjukf {
@@ -75,7 +76,7 @@ void validateGate(const char* owner, const MeasurementGate<Scalar, MeasDim>& gat
 // True when every present component of y is finite.
 template <class Meas, class Mask>
 bool presentComponentsFinite(const Meas& y, const Mask* present) {
-  if (!present) return y.allFinite();
+  if (!present) return detail::allFinite(y);
   for (int j = 0; j < y.size(); ++j)
     if ((*present)(j) && !std::isfinite(y(j))) return false;
   return true;

@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 
 #include "mjukf/covariance_repair.hpp"
+#include "mjukf/detail/finite.hpp"
 #include "mjukf/detail/propagation.hpp"
 #include "mjukf/detail/time_stepping.hpp"
 #include "mjukf/detail/unscented_core.hpp"
@@ -177,7 +178,8 @@ class ModifiedJointUkf : public detail::TimeStepping<ModifiedJointUkf<Model_, In
       if (boundsActive_) settings_.parameterBounds.clamp(candidateParameterPoints_.col(i));
     }
     candidateParameters_ = candidateParameterPoints_.rowwise().sum() / Scalar(SigmaPointCount);  // eq. 10
-    if (!candidateState_.allFinite() || !candidateParameterPoints_.allFinite() || !candidateParameters_.allFinite())
+    if (!detail::allFinite(candidateState_) || !detail::allFinite(candidateParameterPoints_) ||
+        !detail::allFinite(candidateParameters_))
       return Status::NonFiniteResult;
     const Status settled = core_.settle(candidateCovariance_, settings_.repair);
     if (!taken(settled)) return settled;
@@ -210,9 +212,9 @@ class ModifiedJointUkf : public detail::TimeStepping<ModifiedJointUkf<Model_, In
       const Param theta = parameterPoints_.col(i);
       points.col(i) = detail::propagate(model_, integrator_, input, theta, t, h, steps, points.col(i));
     }
-    if (!points.allFinite()) return Status::NonFiniteResult;
+    if (!detail::allFinite(points)) return Status::NonFiniteResult;
     core_.predict(settings_.processNoise, candidateState_, candidateCovariance_);
-    if (!candidateState_.allFinite()) return Status::NonFiniteResult;
+    if (!detail::allFinite(candidateState_)) return Status::NonFiniteResult;
     const Status settled = core_.settle(candidateCovariance_, settings_.repair);
     if (!taken(settled)) return settled;
     core_.commitPoints();
@@ -226,7 +228,7 @@ class ModifiedJointUkf : public detail::TimeStepping<ModifiedJointUkf<Model_, In
   Status propagateMeanWith(const InputSource& input, Scalar t, Scalar h, int steps) {
     if (const Status s = detail::checkStep(t, h, steps); s != Status::Ok) return s;
     candidateState_ = detail::propagate(model_, integrator_, input, parameters_, t, h, steps, state_);
-    if (!candidateState_.allFinite()) return Status::NonFiniteResult;
+    if (!detail::allFinite(candidateState_)) return Status::NonFiniteResult;
     state_ = candidateState_;
     hasPropagatedPoints_ = false;
     return Status::Ok;

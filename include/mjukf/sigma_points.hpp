@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 
 #include "mjukf/detail/cholesky.hpp"
+#include "mjukf/detail/finite.hpp"
 #include "mjukf/detail/validation.hpp"
 #include "mjukf/status.hpp"
 
@@ -63,7 +64,7 @@ class MerweScaledSigmaPoints {
   /// lower triangle is read). Returns Status::NotPositiveDefinite, with `points` untouched, when `cov`
   /// has no factor or is not finite.
   Status generate(const Vector& mean, const Matrix& cov, Points& points) {
-    if (!cov.allFinite() || !detail::choleskyLower(cov, factor_)) return Status::NotPositiveDefinite;
+    if (!detail::allFinite(cov) || !detail::choleskyLower(cov, factor_)) return Status::NotPositiveDefinite;
     return generateFromFactor(mean, factor_, points);
   }
 
@@ -71,7 +72,7 @@ class MerweScaledSigmaPoints {
   /// a filter keeps the factor of the covariance it committed and draws from it without factoring
   /// again. Only the lower triangle of S is read.
   Status generateFromFactor(const Vector& mean, const Matrix& lowerFactor, Points& points) const {
-    if (!mean.allFinite()) return Status::NotPositiveDefinite;
+    if (!detail::allFinite(mean)) return Status::NotPositiveDefinite;
     for (int i = 0; i < L; ++i) {
       // Columns of S, where cov = S Sᵀ (rows would be wrong for a correlated cov).
       points.col(1 + i) = mean;

@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 
 #include "mjukf/covariance_repair.hpp"
+#include "mjukf/detail/finite.hpp"
 #include "mjukf/detail/propagation.hpp"
 #include "mjukf/detail/time_stepping.hpp"
 #include "mjukf/detail/unscented_core.hpp"
@@ -123,7 +124,7 @@ class Ukf : public detail::TimeStepping<Ukf<Model_, Integrator_>, Model_> {
                                        settings_.gate, candidateState_, candidateCovariance_, candidateDiagnostics_);
         s != Status::Ok)
       return s;
-    if (!candidateState_.allFinite()) return Status::NonFiniteResult;
+    if (!detail::allFinite(candidateState_)) return Status::NonFiniteResult;
     const Status settled = core_.settle(candidateCovariance_, settings_.repair);
     if (!taken(settled)) return settled;
     state_ = candidateState_;
@@ -140,9 +141,9 @@ class Ukf : public detail::TimeStepping<Ukf<Model_, Integrator_>, Model_> {
     auto& points = core_.workPoints();
     for (int i = 0; i < SigmaPointCount; ++i)  // χᵢ⁺ = Φ_h(χᵢ; t, θ)
       points.col(i) = detail::propagate(model_, integrator_, input, parameters_, t, h, steps, points.col(i));
-    if (!points.allFinite()) return Status::NonFiniteResult;
+    if (!detail::allFinite(points)) return Status::NonFiniteResult;
     core_.predict(settings_.processNoise, candidateState_, candidateCovariance_);
-    if (!candidateState_.allFinite()) return Status::NonFiniteResult;
+    if (!detail::allFinite(candidateState_)) return Status::NonFiniteResult;
     const Status settled = core_.settle(candidateCovariance_, settings_.repair);
     if (!taken(settled)) return settled;
     core_.commitPoints();
@@ -156,7 +157,7 @@ class Ukf : public detail::TimeStepping<Ukf<Model_, Integrator_>, Model_> {
   Status propagateMeanWith(const InputSource& input, Scalar t, Scalar h, int steps) {
     if (const Status s = detail::checkStep(t, h, steps); s != Status::Ok) return s;
     candidateState_ = detail::propagate(model_, integrator_, input, parameters_, t, h, steps, state_);
-    if (!candidateState_.allFinite()) return Status::NonFiniteResult;
+    if (!detail::allFinite(candidateState_)) return Status::NonFiniteResult;
     state_ = candidateState_;
     hasPropagatedPoints_ = false;
     return Status::Ok;

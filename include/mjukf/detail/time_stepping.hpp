@@ -5,6 +5,7 @@
 // propagateMeanWith(input, t, h, steps); this base supplies the input: the model's own signal u(t), or
 // a value the caller holds constant over the step.
 
+#include "mjukf/detail/finite.hpp"
 #include "mjukf/detail/propagation.hpp"
 #include "mjukf/model.hpp"
 #include "mjukf/status.hpp"
@@ -29,7 +30,7 @@ class TimeStepping {
 
   /// Unscented time update with the input u held constant over the steps (zero-order hold).
   Status timeUpdate(Scalar t, Scalar h, const Input& u, int steps = 1) {
-    if (!u.allFinite()) return Status::NonFiniteInput;
+    if (!allFinite(u)) return Status::NonFiniteInput;
     return self().timeUpdateWith(HeldInput<Model>{u}, t, h, steps);
   }
 
@@ -43,7 +44,7 @@ class TimeStepping {
 
   /// Open-loop propagation of the mean alone with the input u held constant over the steps.
   Status propagateMean(Scalar t, Scalar h, const Input& u, int steps = 1) {
-    if (!u.allFinite()) return Status::NonFiniteInput;
+    if (!allFinite(u)) return Status::NonFiniteInput;
     return self().propagateMeanWith(HeldInput<Model>{u}, t, h, steps);
   }
 

@@ -11,6 +11,7 @@
 
 #include "mjukf/covariance_repair.hpp"
 #include "mjukf/detail/cholesky.hpp"
+#include "mjukf/detail/finite.hpp"
 #include "mjukf/diagnostics.hpp"
 #include "mjukf/measurement_gating.hpp"
 #include "mjukf/sigma_points.hpp"
@@ -68,7 +69,7 @@ class UnscentedCore {
   Status correct(const Points& points, const Vector& predictedMean, const Matrix& predictedCov, const MeasVector& y,
                  const MeasMatrix& measurementNoise, const Mask* present, const Gate& gate, Vector& mean,
                  Matrix& cov, Diagnostics& diagnostics) {
-    if (!measuredPoints_.allFinite()) return Status::NonFiniteResult;  // the model's g gave NaN or Inf
+    if (!allFinite(measuredPoints_)) return Status::NonFiniteResult;  // the model's g gave NaN or Inf
     MeasVector predictedMeasurement;
     unscentedMean(measuredPoints_, sigmaPoints_.meanWeights(), predictedMeasurement);  // ŷ
     measurementDeviations_.noalias() = measuredPoints_.colwise() - predictedMeasurement;
@@ -90,7 +91,7 @@ class UnscentedCore {
       }
     }
 
-    if (!diagnostics.innovationCovariance.allFinite() ||
+    if (!allFinite(diagnostics.innovationCovariance) ||
         !choleskyLower(diagnostics.innovationCovariance, innovationFactor_))
       return Status::InnovationNotPositiveDefinite;
     // NIS = νᵀ P_yy⁻¹ ν = |S⁻¹ ν|² with P_yy = S Sᵀ.
@@ -99,7 +100,7 @@ class UnscentedCore {
     diagnostics.nis = whitened.squaredNorm();
     // An innovation or NIS that overflowed (a model returning huge values) is no measurement to use,
     // even when the gain is zero.
-    if (!std::isfinite(diagnostics.nis) || !diagnostics.innovation.allFinite()) return Status::NonFiniteResult;
+    if (!std::isfinite(diagnostics.nis) || !allFinite(diagnostics.innovation)) return Status::NonFiniteResult;
     if (presentCount > 0 && diagnostics.nis > gate.nisThreshold(presentCount - 1)) return Status::MeasurementRejected;
     // K = P_xy P_yy⁻¹, as Kᵀ = P_yy⁻¹ P_xyᵀ with the Cholesky factor (P_yy is symmetric).
     gainTransposed_ = crossCovariance_.transpose();
