@@ -2,7 +2,6 @@
 // exactly as it was: estimate, covariance, parameters (and MJUKF's θᵢ), diagnostics, and the sigma
 // points a following measurement update would use.
 
-#include <cstring>
 #include <limits>
 #include <type_traits>
 
@@ -12,6 +11,7 @@
 #include "mjukf/joint_ukf.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
 #include "mjukf/ukf.hpp"
+#include "robustness_support.hpp"
 
 namespace {
 
@@ -75,15 +75,11 @@ struct Snapshot {
       parameterPoints = f.parameterPoints();
   }
   // Bitwise equality, NaN included (a refused step must not even touch a NaN).
-  static bool same(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
-    if (a.size() != b.size()) return false;
-    // An empty matrix (the UKF has no parameter points) has a null data(), which memcmp may not get.
-    return a.size() == 0 || std::memcmp(a.data(), b.data(), sizeof(double) * a.size()) == 0;
-  }
   bool operator==(const Snapshot& o) const {
-    return same(state, o.state) && same(covariance, o.covariance) && same(parameters, o.parameters) &&
-           same(parameterPoints, o.parameterPoints) && same(innovation, o.innovation) &&
-           same(innovationCovarianceDiagonal, o.innovationCovarianceDiagonal) && nis == o.nis &&
+    using mjukf::testing::bitwiseSame;
+    return bitwiseSame(state, o.state) && bitwiseSame(covariance, o.covariance) &&
+           bitwiseSame(parameters, o.parameters) && bitwiseSame(parameterPoints, o.parameterPoints) && bitwiseSame(innovation, o.innovation) &&
+           bitwiseSame(innovationCovarianceDiagonal, o.innovationCovarianceDiagonal) && nis == o.nis &&
            hasPropagatedPoints == o.hasPropagatedPoints;
   }
 };
