@@ -21,12 +21,24 @@
 /// };
 /// \endcode
 ///
+/// A **discrete-time** model (the paper's eq. 6, x_k = F(x_{k−1}, u_{k−1}, θ_{k−1})) provides, instead
+/// of `derivative`, the next state over a step of length dt from time t, with the input at t:
+///
+/// \code
+///   State transition(Scalar t, Scalar dt, const State& x, const Input& u, const Param& theta) const;
+/// \endcode
+///
+/// A filter over such a model takes no integrator (its integrator slot defaults to `NoIntegrator`); a
+/// time update over `steps` steps of h applies `transition` `steps` times, at t, t + h, ….
+///
 /// Physical constants are ordinary data members, so the same model can be built with other constants.
 
 #include <type_traits>
 #include <utility>
 
 #include <Eigen/Core>
+
+#include "mjukf/integrators/i_tr_bdf2.hpp"
 
 namespace mjukf {
 
@@ -52,6 +64,19 @@ struct HasDerivative<T, std::void_t<decltype(std::declval<const T&>().derivative
                           typename T::State> {};
 
 template <class T, class = void>
+struct HasTransition : std::false_type {};
+template <class T>
+struct HasTransition<T, std::void_t<decltype(std::declval<const T&>().transition(
+                            std::declval<typename T::Scalar>(), std::declval<typename T::Scalar>(),
+                            std::declval<const typename T::State&>(), std::declval<const typename T::Input&>(),
+                            std::declval<const typename T::Param&>()))>>
+    : std::is_convertible<decltype(std::declval<const T&>().transition(
+                              std::declval<typename T::Scalar>(), std::declval<typename T::Scalar>(),
+                              std::declval<const typename T::State&>(), std::declval<const typename T::Input&>(),
+                              std::declval<const typename T::Param&>())),
+                          typename T::State> {};
+
+template <class T, class = void>
 struct HasMeasurement : std::false_type {};
 template <class T>
 struct HasMeasurement<T, std::void_t<decltype(std::declval<const T&>().measurement(
@@ -72,6 +97,23 @@ using Vector = Eigen::Matrix<Scalar, Rows, 1>;
 template <class Model>
 inline constexpr bool hasInputSignal = detail::HasInputSignal<Model>::value;
 
+/// True when `Model` is given in discrete time, by `transition` (the next state) rather than
+/// `derivative`.
+template <class Model>
+inline constexpr bool isDiscreteTime = detail::HasTransition<Model>::value;
+
+/// The integrator of a filter over a discrete-time model: none. It only marks the slot.
+template <class Scalar_>
+struct NoIntegrator {
+  using Scalar = Scalar_;
+};
+
+/// The integrator a filter uses when none is named: the paper's I-TR-BDF2 (first order; see
+/// docs/integrators.md for the others) for a continuous model, none for a discrete-time one.
+template <class Model>
+using DefaultIntegrator = std::conditional_t<isDiscreteTime<Model>, NoIntegrator<typename Model::Scalar>,
+                                             ITrBdf2<typename Model::Scalar>>;
+
 /// Checks the model concept at compile time; every filter calls it. `MinParamDim` is 1 for the joint
 /// filters, which estimate parameters, and 0 for the plain UKF.
 template <class Model, int MinParamDim = 0>
@@ -90,8 +132,13 @@ constexpr bool checkModel() {
                 "Model::Meas must be Eigen::Matrix<Scalar, MeasDim, 1>");
   static_assert(std::is_same_v<typename Model::Input, detail::Vector<Scalar, Model::InputDim>>,
                 "Model::Input must be Eigen::Matrix<Scalar, InputDim, 1>");
-  static_assert(detail::HasDerivative<Model>::value,
-                "Model needs `State derivative(Scalar t, const State&, const Input&, const Param&) const`");
+  static_assert(detail::HasDerivative<Model>::value || detail::HasTransition<Model>::value,
+                "Model needs `State derivative(Scalar t, const State&, const Input&, const Param&) const` (continuous "
+                "time) or `State transition(Scalar t, Scalar dt, const State&, const Input&, const Param&) const` "
+                "(discrete time)");
+  static_assert(!(detail::HasDerivative<Model>::value && detail::HasTransition<Model>::value),
+                "Model has both `derivative` and `transition`: give one, so that it is clear whether the filter "
+                "integrates it");
   static_assert(detail::HasMeasurement<Model>::value,
                 "Model needs `Meas measurement(const State&, const Param&) const`");
   return true;

@@ -1,7 +1,7 @@
 #pragma once
 
 /// \file
-/// Lower and upper bounds on the estimated parameters of `JointUkf` and `ModifiedJointUkf`.
+/// Lower and upper bounds on the estimated parameters of `JointUkf`, `ModifiedJointUkf` and `DualUkf`.
 
 #include <limits>
 
@@ -46,13 +46,15 @@ struct ParameterBounds {
 
 namespace detail {
 
+// The bounds, and `initial` (named `initialName` in the message) within them.
 template <class Scalar, int ParamDim, class Initial>
-void validateBounds(const char* owner, const ParameterBounds<Scalar, ParamDim>& bounds, const Initial& initial) {
+void validateBounds(const char* owner, const ParameterBounds<Scalar, ParamDim>& bounds, const Initial& initial,
+                    const char* initialName = "initialParameters") {
   if (bounds.lower.hasNaN() || bounds.upper.hasNaN()) throwInvalid(owner, "parameterBounds", "must not be NaN");
   if (!(bounds.lower.array() <= bounds.upper.array()).all())
     throwInvalid(owner, "parameterBounds", "must have lower <= upper");
   if (!(initial.array() >= bounds.lower.array()).all() || !(initial.array() <= bounds.upper.array()).all())
-    throwInvalid(owner, "initialParameters", "must lie within parameterBounds");
+    throwInvalid(owner, initialName, "must lie within parameterBounds");
 }
 
 }  // namespace detail

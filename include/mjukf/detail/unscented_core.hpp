@@ -1,9 +1,9 @@
 #pragma once
 
-// The workspace and the arithmetic shared by the three filters: draw sigma points, take the moments of
-// the propagated points (§2), and the Kalman correction from measured points (§3). The filters only
-// say how a point is propagated and measured. Every result goes to an output argument so that a filter
-// can check it before committing it (the strong guarantee of the failure policy).
+// One unscented estimate: the committed mean, covariance, its Cholesky factor and propagated sigma
+// points, the workspace a step computes into, and the arithmetic of docs/algorithms.md §1–3. A filter
+// step writes only to the candidates here and commits them with one call, so "the stored factor is the
+// Cholesky factor of the committed P" is kept by this class alone: nothing else can assign P.
 
 #include <cmath>
 
@@ -31,104 +31,150 @@ class UnscentedCore {
   using MeasVector = Eigen::Matrix<Scalar, M, 1>;
   using MeasMatrix = Eigen::Matrix<Scalar, M, M>;
   using MeasPoints = Eigen::Matrix<Scalar, M, Count>;
-  using Gain = Eigen::Matrix<Scalar, L, M>;
   using Diagnostics = UpdateDiagnostics<Scalar, M>;
   using Mask = MeasurementMask<M>;
   using Gate = MeasurementGate<Scalar, M>;
 
+  /// Throws std::invalid_argument naming α, β or κ when they are invalid (sigma_points.hpp).
   explicit UnscentedCore(const SigmaPointParameters<Scalar>& parameters) : sigmaPoints_(parameters) {}
 
-  /// Symmetrises the filter's P₀ and keeps its Cholesky factor; throws, naming P₀, when it has none.
-  void adoptInitialCovariance(const char* owner, Matrix& p0) { symmetrizeInitialCovariance(owner, p0, committedFactor_); }
+  // ---- The committed estimate ----------------------------------------------------------------------
+  const Vector& mean() const { return mean_; }
+  const Matrix& covariance() const { return covariance_; }
+  /// The lower Cholesky factor of covariance().
+  const Matrix& factor() const { return factor_; }
+  /// The points of the last time update, while they are still the estimate's (hasPoints()).
+  const Points& points() const { return points_; }
+  bool hasPoints() const { return hasPoints_; }
+  const Diagnostics& diagnostics() const { return diagnostics_; }
 
-  /// §1: draws the points of (mean, P) into workPoints(), leaving points() as they are, where P is
-  /// the covariance last committed with commitCovariance() (or adopted at construction): its Cholesky
-  /// factor is already known, so nothing is factored here.
-  Status draw(const Vector& mean) { return sigmaPoints_.generateFromFactor(mean, committedFactor_, workPoints_); }
-
-  /// `committed` ← `settled`, a covariance that settle() has just accepted, and its factor with it.
-  void commitCovariance(Matrix& committed, const Matrix& settled) {
-    committed = settled;
-    committedFactor_ = guard_.factor();
+  /// Makes (mean, cov) the estimate, with cov symmetrised as every committed P is, and forgets the
+  /// propagated points; the diagnostics are zeroed. Returns false, changing nothing, when the
+  /// symmetrised cov has no Cholesky factor or either is not finite.
+  bool assign(const Vector& mean, const Matrix& cov) {
+    Matrix symmetric = cov, factor;
+    symmetrize(symmetric);
+    if (!allFinite(mean) || !allFinite(symmetric) || !choleskyLower(symmetric, factor)) return false;
+    mean_ = mean;
+    covariance_ = symmetric;
+    factor_ = factor;
+    hasPoints_ = false;
+    diagnostics_ = Diagnostics();
+    return true;
   }
 
-  /// §2: x̂⁻ = Σ Wmᵢ χᵢ⁺, P⁻ = Σ Wcᵢ (χᵢ⁺ − x̂⁻)(χᵢ⁺ − x̂⁻)ᵀ + Q, from the propagated workPoints().
-  void predict(const Matrix& processNoise, Vector& mean, Matrix& cov) {
-    unscentedMean(workPoints_, sigmaPoints_.meanWeights(), mean);
-    stateDeviations_.noalias() = workPoints_.colwise() - mean;
-    weightedOuterSum(stateDeviations_, stateDeviations_, cov);
-    cov += processNoise;
+  // ---- One step: draw, propagate (the filter), predict or correct, settle, commit -------------------
+
+  /// §1: the points of (mean, P) into workPoints(), with P the committed covariance, whose factor is
+  /// known: nothing is factored here.
+  Status draw(const Vector& mean) { return sigmaPoints_.generateFromFactor(mean, factor_, workPoints_); }
+  /// §1 from another estimate's mean and factor (the dual filter's re-prediction).
+  Status drawFrom(const Vector& mean, const Matrix& lowerFactor) {
+    return sigmaPoints_.generateFromFactor(mean, lowerFactor, workPoints_);
   }
 
-  /// §3, from `points` about `predictedMean` and their images measuredPoints(): writes the corrected
-  /// mean and covariance and the diagnostics. The inputs are left untouched; on a status other than Ok
-  /// the outputs are unspecified. With `present` (may be null: all present), the missing components
-  /// get zero rows and columns in P_yy (one on its diagonal), in P_xy and in the innovation: the gain
-  /// then has zero columns there and the update is exactly that of the reduced model. `gate` refuses
-  /// an update whose NIS exceeds its threshold, before anything is computed from the gain.
-  Status correct(const Points& points, const Vector& predictedMean, const Matrix& predictedCov, const MeasVector& y,
-                 const MeasMatrix& measurementNoise, const Mask* present, const Gate& gate, Vector& mean,
-                 Matrix& cov, Diagnostics& diagnostics) {
+  /// §2: x̂⁻ = Σ Wmᵢ χᵢ⁺, P⁻ = Σ Wcᵢ (χᵢ⁺ − x̂⁻)(χᵢ⁺ − x̂⁻)ᵀ + Q from the propagated workPoints(), into
+  /// candidateMean() and candidateCovariance().
+  void predict(const Matrix& processNoise) {
+    unscentedMean(workPoints_, sigmaPoints_.meanWeights(), candidateMean_);
+    deviations_.noalias() = workPoints_.colwise() - candidateMean_;
+    weightedOuterSum(deviations_, deviations_, candidateCovariance_);
+    candidateCovariance_ += processNoise;
+  }
+
+  /// §3 from `points` about the prior (`priorMean`, `priorCov`) and their images measuredPoints(), into
+  /// candidateMean(), candidateCovariance() and candidateDiagnostics(); on a status other than Ok the
+  /// candidates are unspecified. With `present` (null: all present), the missing components get zero
+  /// rows and columns in P_yy (one on its diagonal), in P_xy and in the innovation: the gain then has
+  /// zero columns there and the update is exactly that of the reduced model. `gate` refuses an update
+  /// whose NIS exceeds its threshold, before anything is computed from the gain.
+  Status correct(const Points& points, const Vector& priorMean, const Matrix& priorCov, const MeasVector& y,
+                 const MeasMatrix& measurementNoise, const Mask* present, const Gate& gate) {
     if (!allFinite(measuredPoints_)) return Status::NonFiniteResult;  // the model's g gave NaN or Inf
+    Diagnostics& d = candidateDiagnostics_;
     MeasVector predictedMeasurement;
     unscentedMean(measuredPoints_, sigmaPoints_.meanWeights(), predictedMeasurement);  // ŷ
     measurementDeviations_.noalias() = measuredPoints_.colwise() - predictedMeasurement;
-    stateDeviations_.noalias() = points.colwise() - predictedMean;
-    weightedOuterSum(measurementDeviations_, measurementDeviations_, diagnostics.innovationCovariance);
-    diagnostics.innovationCovariance += measurementNoise;  // P_yy
-    weightedOuterSum(stateDeviations_, measurementDeviations_, crossCovariance_);  // P_xy
-    diagnostics.innovation = y - predictedMeasurement;
+    deviations_.noalias() = points.colwise() - priorMean;
+    weightedOuterSum(measurementDeviations_, measurementDeviations_, d.innovationCovariance);
+    d.innovationCovariance += measurementNoise;                                 // P_yy
+    weightedOuterSum(deviations_, measurementDeviations_, crossCovariance_);  // P_xy
+    d.innovation = y - predictedMeasurement;
     int presentCount = M;
     if (present) {
       for (int j = 0; j < M; ++j) {
         if ((*present)(j)) continue;
-        diagnostics.innovationCovariance.row(j).setZero();
-        diagnostics.innovationCovariance.col(j).setZero();
-        diagnostics.innovationCovariance(j, j) = Scalar(1);
+        d.innovationCovariance.row(j).setZero();
+        d.innovationCovariance.col(j).setZero();
+        d.innovationCovariance(j, j) = Scalar(1);
         crossCovariance_.col(j).setZero();
-        diagnostics.innovation(j) = Scalar(0);  // y(j) may be NaN: overwrite, never multiply by 0
+        d.innovation(j) = Scalar(0);  // y(j) may be NaN: overwrite, never multiply by 0
         --presentCount;
       }
     }
 
-    if (!allFinite(diagnostics.innovationCovariance) ||
-        !choleskyLower(diagnostics.innovationCovariance, innovationFactor_))
+    if (!allFinite(d.innovationCovariance) || !choleskyLower(d.innovationCovariance, innovationFactor_))
       return Status::InnovationNotPositiveDefinite;
     // NIS = νᵀ P_yy⁻¹ ν = |S⁻¹ ν|² with P_yy = S Sᵀ.
-    MeasVector whitened = diagnostics.innovation;
+    MeasVector whitened = d.innovation;
     solveLower(whitened);
-    diagnostics.nis = whitened.squaredNorm();
+    d.nis = whitened.squaredNorm();
     // An innovation or NIS that overflowed (a model returning huge values) is no measurement to use,
     // even when the gain is zero.
-    if (!std::isfinite(diagnostics.nis) || !allFinite(diagnostics.innovation)) return Status::NonFiniteResult;
-    if (presentCount > 0 && diagnostics.nis > gate.nisThreshold(presentCount - 1)) return Status::MeasurementRejected;
+    if (!std::isfinite(d.nis) || !allFinite(d.innovation)) return Status::NonFiniteResult;
+    if (presentCount > 0 && d.nis > gate.nisThreshold(presentCount - 1)) return Status::MeasurementRejected;
     // K = P_xy P_yy⁻¹, as Kᵀ = P_yy⁻¹ P_xyᵀ with the Cholesky factor (P_yy is symmetric).
     gainTransposed_ = crossCovariance_.transpose();
     solveLower(gainTransposed_);
     solveUpper(gainTransposed_);
-    mean = predictedMean;
-    mean.noalias() += gainTransposed_.transpose() * diagnostics.innovation;
+    candidateMean_ = priorMean;
+    candidateMean_.noalias() += gainTransposed_.transpose() * d.innovation;
     // P = P⁻ − K P_yy Kᵀ = P⁻ − P_xy Kᵀ
-    cov = predictedCov;
-    cov.noalias() -= crossCovariance_ * gainTransposed_;
+    candidateCovariance_ = priorCov;
+    candidateCovariance_.noalias() -= crossCovariance_ * gainTransposed_;
     return Status::Ok;
   }
 
-  /// What every step does with the covariance it is about to commit: symmetrise it, check it has a
-  /// Cholesky factor, repair it if not (covariance_repair.hpp). Ok, Repaired, or a refusal.
-  /// Only a covariance accepted here may be committed, and only with commitCovariance().
-  Status settle(Matrix& cov, const CovarianceRepair<Scalar>& repair) { return guard_.settle(cov, repair); }
+  /// What every step does with the covariance it is about to commit: symmetrise candidateCovariance(),
+  /// check it has a Cholesky factor, repair it if not (covariance_repair.hpp). Ok, Repaired, or a
+  /// refusal. Only a covariance accepted here is committed.
+  Status settle(const CovarianceRepair<Scalar>& repair) { return guard_.settle(candidateCovariance_, repair); }
 
-  /// Makes the work points the filter's points, once the step that made them has succeeded.
-  void commitPoints() { points_ = workPoints_; }
+  /// Commits a time update that settle() accepted: its mean, covariance and factor, and its points.
+  void commitPrediction() {
+    points_ = workPoints_;
+    hasPoints_ = true;
+    commitCandidate();
+  }
+  /// Commits a measurement update that settle() accepted: its mean, covariance, factor and diagnostics.
+  /// The points no longer describe the estimate.
+  void commitCorrection() {
+    diagnostics_ = candidateDiagnostics_;
+    hasPoints_ = false;
+    commitCandidate();
+  }
+  /// Commits a new mean alone (an open-loop propagation): P and its factor stay.
+  void commitMean(const Vector& mean) {
+    mean_ = mean;
+    hasPoints_ = false;
+  }
 
   Points& workPoints() { return workPoints_; }
-  const Points& points() const { return points_; }
   MeasPoints& measuredPoints() { return measuredPoints_; }
   const MeasPoints& measuredPoints() const { return measuredPoints_; }
+  Vector& candidateMean() { return candidateMean_; }
+  const Matrix& candidateCovariance() const { return candidateCovariance_; }
+  /// The factor of candidateCovariance() after settle() accepted it.
+  const Matrix& candidateFactor() const { return guard_.factor(); }
   const SigmaPoints& sigmaPoints() const { return sigmaPoints_; }
 
  private:
+  void commitCandidate() {
+    mean_ = candidateMean_;
+    covariance_ = candidateCovariance_;
+    factor_ = guard_.factor();
+  }
+
   // Σ Wcᵢ aᵢ bᵢᵀ (unscentedCovarianceFromDeviations) as a coefficient-wise product. Left to choose,
   // Eigen takes its general GEMM kernel once rows + columns + depth exceed 20 (JUKF on the robot:
   // 6 + 6 + 13), and packing the operands then costs more than the whole rest of the step.
@@ -158,16 +204,25 @@ class UnscentedCore {
   }
 
   SigmaPoints sigmaPoints_;
-  Points points_;                 // the filter's propagated points χᵢ⁺, used by the measurement update
-  Points workPoints_;             // drawn, then propagated in place, before they are committed
-  MeasPoints measuredPoints_;     // Yᵢ = g(χᵢ⁺)
-  Points stateDeviations_;        // χᵢ⁺ − x̂⁻
-  MeasPoints measurementDeviations_;  // Yᵢ − ŷ
-  Gain crossCovariance_;          // P_xy
-  Eigen::Matrix<Scalar, M, L> gainTransposed_;  // Kᵀ
-  MeasMatrix innovationFactor_;   // S with P_yy = S Sᵀ
+  // Committed.
+  Vector mean_ = Vector::Zero();
+  Matrix covariance_ = Matrix::Zero();
+  Matrix factor_ = Matrix::Zero();  // S with covariance_ = S Sᵀ
+  Points points_ = Points::Zero();  // χᵢ⁺ of the last time update, used by the measurement update
+  bool hasPoints_ = false;
+  Diagnostics diagnostics_;
+  // Workspace: a step computes here and commits only when the whole step succeeded.
+  Points workPoints_;                  // drawn, then propagated in place
+  MeasPoints measuredPoints_;          // Yᵢ = g(χᵢ⁺)
+  Points deviations_;                  // χᵢ⁺ − x̂⁻
+  MeasPoints measurementDeviations_;   // Yᵢ − ŷ
+  Eigen::Matrix<Scalar, L, M> crossCovariance_;  // P_xy
+  Eigen::Matrix<Scalar, M, L> gainTransposed_;   // Kᵀ
+  MeasMatrix innovationFactor_;        // S with P_yy = S Sᵀ
+  Vector candidateMean_;
+  Matrix candidateCovariance_;
+  Diagnostics candidateDiagnostics_;
   CovarianceGuard<Scalar, L> guard_;
-  Matrix committedFactor_;        // the Cholesky factor of the filter's committed P
 };
 
 }  // namespace mjukf::detail

@@ -66,16 +66,3 @@ void requirePositiveSemiDefinite(const char* owner, const char* setting, const E
 }
 
 }  // namespace mjukf::detail
-
-namespace mjukf::detail {
-
-// P₀ and R symmetric positive definite, Q symmetric positive semi-definite: the settings all three
-// filters share.
-template <class Settings>
-void validateNoiseSettings(const char* owner, const Settings& settings) {
-  requirePositiveDefinite(owner, "initialCovariance (P0)", settings.initialCovariance);
-  requirePositiveSemiDefinite(owner, "processNoise (Q)", settings.processNoise);
-  requirePositiveDefinite(owner, "measurementNoise (R)", settings.measurementNoise);
-}
-
-}  // namespace mjukf::detail

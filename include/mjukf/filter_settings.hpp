@@ -1,0 +1,47 @@
+#pragma once
+
+/// \file
+/// The settings every filter shares, declared and documented once; each filter's own settings
+/// struct derives from these and adds what only it has.
+
+#include <Eigen/Core>
+
+#include "mjukf/covariance_repair.hpp"
+#include "mjukf/measurement_gating.hpp"
+#include "mjukf/parameter_bounds.hpp"
+#include "mjukf/sigma_points.hpp"
+
+namespace mjukf {
+
+/// Settings of an unscented estimate of an `EstimateDim`-vector (the state x for `Ukf`,
+/// `ModifiedJointUkf` and the state filter of `DualUkf`; [x; θ] for `JointUkf`) measured through
+/// `MeasDim` components. Validated when a filter is constructed.
+template <class Scalar_, int EstimateDim, int MeasDim>
+struct UnscentedSettings {
+  using Scalar = Scalar_;
+  using CovarianceMatrix = Eigen::Matrix<Scalar, EstimateDim, EstimateDim>;
+  using MeasMatrix = Eigen::Matrix<Scalar, MeasDim, MeasDim>;
+
+  SigmaPointParameters<Scalar> sigmaPoints;                        ///< α, β, κ
+  CovarianceMatrix initialCovariance = CovarianceMatrix::Zero();  ///< P₀, symmetric positive definite
+  CovarianceMatrix processNoise = CovarianceMatrix::Zero();       ///< Q, symmetric positive semi-definite
+  MeasMatrix measurementNoise = MeasMatrix::Zero();               ///< R, symmetric positive definite
+  /// false (the paper's Algorithm 1): the measurement update reuses the propagated sigma points, so
+  /// P_xy and P_yy leave Q out. true: it draws new points from (x̂⁻, P⁻), which costs one more
+  /// Cholesky factorisation and makes the filter the textbook Kalman filter on linear models.
+  bool redrawPointsForUpdate = false;
+  /// What a step does with a covariance that is not positive definite before committing it
+  /// (covariance_repair.hpp): by default, mend rounding-level losses and refuse the rest.
+  CovarianceRepair<Scalar> repair;
+  /// The innovation gate of the measurement update (measurement_gating.hpp); off by default.
+  MeasurementGate<Scalar, MeasDim> gate;
+};
+
+/// The shared settings of a filter that also estimates `ParamDim` parameters.
+template <class Scalar, int EstimateDim, int MeasDim, int ParamDim>
+struct ParameterEstimationSettings : UnscentedSettings<Scalar, EstimateDim, MeasDim> {
+  /// Box bounds on the estimated parameters (parameter_bounds.hpp); off by default.
+  ParameterBounds<Scalar, ParamDim> parameterBounds;
+};
+
+}  // namespace mjukf
