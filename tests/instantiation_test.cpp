@@ -26,10 +26,9 @@ namespace mjukf {
   template class JointUkf<models::FlexibleJoint<Scalar>>;                                            \
   template class ModifiedJointUkf<models::CoupledTank<Scalar>>;                                      \
   template class ModifiedJointUkf<models::FlexibleJoint<Scalar>>;                                    \
-  template class detail::TimeStepping<Ukf<models::CoupledTank<Scalar>>, models::CoupledTank<Scalar>>; \
-  template class detail::TimeStepping<JointUkf<models::FlexibleJoint<Scalar>>, models::FlexibleJoint<Scalar>>; \
-  template class detail::TimeStepping<ModifiedJointUkf<models::FlexibleJoint<Scalar>>,               \
-                                      models::FlexibleJoint<Scalar>>;                                \
+  template class DualUkf<models::CoupledTank<Scalar>>;                                               \
+  template class DualUkf<models::FlexibleJoint<Scalar>>;                                             \
+  template struct DualUkfSettings<models::FlexibleJoint<Scalar>>;                                    \
   template struct UkfSettings<models::FlexibleJoint<Scalar>>;                                        \
   template struct JointUkfSettings<models::FlexibleJoint<Scalar>>;                                   \
   template struct ModifiedJointUkfSettings<models::FlexibleJoint<Scalar>>;                           \

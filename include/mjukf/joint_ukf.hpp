@@ -85,7 +85,8 @@ class JointUkf : public detail::UnscentedEngine<JointUkf<Model_, Integrator_>, M
     detail::requireFinite(kOwner, parametersName, theta);
     detail::validateBounds(kOwner, bounds, theta, parametersName);
     AugmentedState z;
-    z << x, theta;
+    z.template head<StateDim>() = x;
+    z.template tail<ParamDim>() = theta;
     return z;
   }
 

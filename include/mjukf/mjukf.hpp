@@ -4,6 +4,8 @@
 /// Umbrella header: the whole public API of mjukf.
 
 #include "mjukf/diagnostics.hpp"
+#include "mjukf/dual_ukf.hpp"
+#include "mjukf/filter_settings.hpp"
 #include "mjukf/integrators/integrators.hpp"
 #include "mjukf/joint_ukf.hpp"
 #include "mjukf/model.hpp"

@@ -163,7 +163,8 @@ class UnscentedCore {
   MeasPoints& measuredPoints() { return measuredPoints_; }
   const MeasPoints& measuredPoints() const { return measuredPoints_; }
   Vector& candidateMean() { return candidateMean_; }
-  const Matrix& candidateCovariance() const { return candidateCovariance_; }
+  const Vector& candidateMean() const { return candidateMean_; }
+  Matrix& candidateCovariance() { return candidateCovariance_; }
   /// The factor of candidateCovariance() after settle() accepted it.
   const Matrix& candidateFactor() const { return guard_.factor(); }
   const SigmaPoints& sigmaPoints() const { return sigmaPoints_; }
