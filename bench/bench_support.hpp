@@ -13,7 +13,7 @@
 #include "mjukf/integrators/i_tr_bdf2.hpp"
 #include "mjukf/joint_ukf.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
-#include "mjukf/paper_experiments.hpp"
+#include "mjukf/paper/experiments.hpp"
 #include "mjukf/ukf.hpp"
 
 namespace mjukf::bench {

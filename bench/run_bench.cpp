@@ -9,7 +9,8 @@
 
 #include "bench_support.hpp"
 #include "common/csv.hpp"
-#include "mjukf/paper_schedule.hpp"
+#include "mjukf/paper/rmse.hpp"
+#include "mjukf/paper/schedule.hpp"
 
 namespace mjukf::bench {
 namespace {
@@ -43,8 +44,8 @@ void wholeRun(benchmark::State& state) {
   Eigen::Matrix<double, Model::ParamDim, 1> rmse = decltype(rmse)::Zero();
   for (auto _ : state) {
     auto filter = makeFilter<Kind, Experiment>();
-    RmseAccumulator<double, Model::ParamDim> accumulator;
-    const auto outcome = runPaperSchedule(
+    paper::RmseAccumulator<double, Model::ParamDim> accumulator;
+    const auto outcome = paper::runSchedule(
         filter, static_cast<long>(y.size()), Experiment::stepSize, Experiment::measurementEvery,
         [&](long k) -> const typename Model::Meas& { return y[static_cast<std::size_t>(k)]; },
         [&](long k, const Filter& f) {

@@ -11,8 +11,9 @@
 #include "common/csv.hpp"
 #include "mjukf/joint_ukf.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
-#include "mjukf/paper_experiments.hpp"
-#include "mjukf/paper_schedule.hpp"
+#include "mjukf/paper/experiments.hpp"
+#include "mjukf/paper/rmse.hpp"
+#include "mjukf/paper/schedule.hpp"
 
 namespace {
 
@@ -37,9 +38,9 @@ template <class Experiment, class Filter>
 typename Experiment::Param paperRmse(Filter& filter, const std::string& file) {
   using Model = typename Experiment::Model;
   const auto y = measurements<typename Model::Meas>(readCsv(std::string(MJUKF_DATA_DIR) + "/" + file));
-  mjukf::RmseAccumulator<double, Model::ParamDim> rmse;
+  mjukf::paper::RmseAccumulator<double, Model::ParamDim> rmse;
   const auto truth = Model::trueParameters();
-  const auto outcome = mjukf::runPaperSchedule(
+  const auto outcome = mjukf::paper::runSchedule(
       filter, static_cast<long>(y.size()), Experiment::stepSize, Experiment::measurementEvery,
       [&](long k) -> const typename Model::Meas& { return y[static_cast<std::size_t>(k)]; },
       [&](long k, const Filter& f) {

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "mjukf/mjukf.hpp"
+#include "mjukf/paper/paper.hpp"
 
 namespace mjukf {
 
@@ -33,7 +34,7 @@ namespace mjukf {
   template struct JointUkfSettings<models::FlexibleJoint<Scalar>>;                                   \
   template struct ModifiedJointUkfSettings<models::FlexibleJoint<Scalar>>;                           \
   template struct UpdateDiagnostics<Scalar, 4>;                                                      \
-  template class RmseAccumulator<Scalar, 2>;                                                         \
+  template class paper::RmseAccumulator<Scalar, 2>;                                                  \
   template struct paper::CoupledTankExperiment<Scalar>;                                              \
   template struct paper::FlexibleJointExperiment<Scalar>;
 
@@ -71,10 +72,10 @@ TEST(Instantiation, FloatFilterRunsAndAgreesWithDouble) {
                                                 RobotF::modifiedJointUkf());
   mjukf::ModifiedJointUkf<RobotD::Model> twice(RobotD::Model(), RobotD::initialState(), RobotD::initialParameters(),
                                                RobotD::modifiedJointUkf());
-  const auto runF = mjukf::runPaperSchedule(
+  const auto runF = mjukf::paper::runSchedule(
       single, rows, 1e-3f, 5, [&](long k) { return RobotF::Model::Meas(truth[k].cast<float>()); },
       [](long, const auto&) {});
-  const auto runD = mjukf::runPaperSchedule(
+  const auto runD = mjukf::paper::runSchedule(
       twice, rows, 1e-3, 5, [&](long k) { return truth[k]; }, [](long, const auto&) {});
   ASSERT_EQ(runF.status, mjukf::Status::Ok) << "row " << runF.row;
   ASSERT_EQ(runD.status, mjukf::Status::Ok) << "row " << runD.row;

@@ -8,7 +8,7 @@
 #include "mjukf/models/coupled_tank.hpp"
 #include "mjukf/models/flexible_joint.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
-#include "mjukf/paper_experiments.hpp"
+#include "mjukf/paper/experiments.hpp"
 #include "mjukf/ukf.hpp"
 #include "test_support.hpp"
 

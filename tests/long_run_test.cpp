@@ -8,8 +8,9 @@
 
 #include <gtest/gtest.h>
 
-#include "mjukf/paper_experiments.hpp"
-#include "mjukf/paper_schedule.hpp"
+#include "mjukf/paper/experiments.hpp"
+#include "mjukf/paper/rmse.hpp"
+#include "mjukf/paper/schedule.hpp"
 #include "robustness_support.hpp"
 
 namespace {
@@ -21,9 +22,9 @@ template <class Filter>
 void longRun(Filter& filter, const char* name) {
   mjukf::testing::TankMeasurements<Tank::Model> data(Tank::stepSize, 0.3, 2024);
   long updatesChecked = 0, failures = 0;
-  mjukf::RmseAccumulator<double, 1> lastHour;
+  mjukf::paper::RmseAccumulator<double, 1> lastHour;
   const auto start = std::chrono::steady_clock::now();
-  const auto outcome = mjukf::runPaperSchedule(
+  const auto outcome = mjukf::paper::runSchedule(
       filter, kRows, Tank::stepSize, Tank::measurementEvery,
       [&](long k) -> const Tank::Model::Meas& { return data.at(k); },
       [&](long k, const Filter& f) {

@@ -13,8 +13,8 @@
 
 #include <gtest/gtest.h>
 
-#include "mjukf/paper_experiments.hpp"
-#include "mjukf/paper_schedule.hpp"
+#include "mjukf/paper/experiments.hpp"
+#include "mjukf/paper/schedule.hpp"
 #include "test_support.hpp"
 
 namespace {
@@ -102,9 +102,9 @@ TYPED_TEST(NoAllocation, PaperScheduleRun) {
   using Filter = decltype(filter);
   using Scalar = typename Filter::Scalar;
   const typename Filter::Meas y = Filter::Meas::Constant(Scalar(0.01));
-  mjukf::ScheduleOutcome outcome;
+  mjukf::paper::ScheduleOutcome outcome;
   const long count = allocationsDuring([&] {
-    outcome = mjukf::runPaperSchedule(
+    outcome = mjukf::paper::runSchedule(
         filter, 500, Scalar(1e-3), 5, [&](long) -> const typename Filter::Meas& { return y; },
         [](long, const Filter&) {});
   });

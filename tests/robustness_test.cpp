@@ -15,8 +15,9 @@
 
 #include "mjukf/covariance_repair.hpp"
 #include "mjukf/measurement_gating.hpp"
-#include "mjukf/paper_experiments.hpp"
-#include "mjukf/paper_schedule.hpp"
+#include "mjukf/paper/experiments.hpp"
+#include "mjukf/paper/rmse.hpp"
+#include "mjukf/paper/schedule.hpp"
 #include "robustness_support.hpp"
 #include "test_support.hpp"
 
@@ -259,7 +260,7 @@ TYPED_TEST(Hardening, EveryCommittedCovarianceIsSymmetricPositiveDefinite) {
   std::mt19937_64 rng(11);
   std::normal_distribution<double> noise(0.0, 0.05);
   long checked = 0;
-  const auto outcome = mjukf::runPaperSchedule(
+  const auto outcome = mjukf::paper::runSchedule(
       filter, 5000, Experiment::stepSize, Experiment::measurementEvery,
       [&](long) {
         typename Filter::Meas y = filter.model().measurement(filter.state(), filter.parameters());
@@ -577,9 +578,9 @@ double tankRmse(double gateProbability, double outlierFraction, unsigned long lo
   mjukf::testing::TankMeasurements<Tank::Model> data(1e-3, 0.3, seed);
   std::mt19937_64 pick(seed + 1);
   std::uniform_real_distribution<double> uniform;
-  mjukf::RmseAccumulator<double, 1> rmse;
+  mjukf::paper::RmseAccumulator<double, 1> rmse;
   Tank::Model::Meas y;
-  const auto outcome = mjukf::runPaperSchedule(
+  const auto outcome = mjukf::paper::runSchedule(
       filter, 200001, 1e-3, Tank::measurementEvery,
       [&](long k) -> const Tank::Model::Meas& {
         y = data.at(k);

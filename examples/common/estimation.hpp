@@ -11,7 +11,8 @@
 #include "common/plant_data.hpp"
 #include "mjukf/joint_ukf.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
-#include "mjukf/paper_schedule.hpp"
+#include "mjukf/paper/rmse.hpp"
+#include "mjukf/paper/schedule.hpp"
 #include "mjukf/ukf.hpp"
 
 namespace mjukf::examples {
@@ -53,7 +54,7 @@ template <class Model>
 struct EstimateRun {
   std::vector<typename Model::State> state;
   std::vector<typename Model::Param> parameters;
-  ScheduleOutcome outcome;
+  paper::ScheduleOutcome outcome;
   double loopSeconds = 0;  ///< wall time of the schedule loop alone
 };
 
@@ -65,7 +66,7 @@ EstimateRun<Model> runSchedule(Filter& filter, const PlantData<Model>& data, int
   run.state.resize(data.y.size());
   run.parameters.resize(data.y.size());
   const auto start = std::chrono::steady_clock::now();
-  run.outcome = runPaperSchedule(
+  run.outcome = paper::runSchedule(
       filter, data.rows(), data.stepSize, measurementEvery,
       [&](long k) -> const typename Model::Meas& { return data.y[static_cast<std::size_t>(k)]; },
       [&](long k, const Filter& f) {
@@ -109,7 +110,7 @@ EstimateRun<typename Experiment::Model> runFilter(const typename Experiment::Mod
 /// RMSE of each parameter over rows `fromRow` … (eq. 16), against the data's parameter truth.
 template <class Model>
 typename Model::Param parameterRmse(const EstimateRun<Model>& run, const PlantData<Model>& data, long fromRow) {
-  RmseAccumulator<typename Model::Scalar, Model::ParamDim> rmse;
+  paper::RmseAccumulator<typename Model::Scalar, Model::ParamDim> rmse;
   for (long k = fromRow; k < static_cast<long>(run.parameters.size()); ++k)
     rmse.add(run.parameters[static_cast<std::size_t>(k)], data.parameterTruth[static_cast<std::size_t>(k)]);
   return rmse.value();

@@ -1,7 +1,8 @@
 #pragma once
 
 /// \file
-/// Umbrella header: the whole public API of mjukf.
+/// Umbrella header: the whole core API of mjukf. The paper's experiments, schedule and RMSE are a
+/// layer of their own, `mjukf/paper/paper.hpp`.
 
 #include "mjukf/diagnostics.hpp"
 #include "mjukf/dual_ukf.hpp"
@@ -12,8 +13,6 @@
 #include "mjukf/models/coupled_tank.hpp"
 #include "mjukf/models/flexible_joint.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
-#include "mjukf/paper_experiments.hpp"
-#include "mjukf/paper_schedule.hpp"
 #include "mjukf/sigma_points.hpp"
 #include "mjukf/status.hpp"
 #include "mjukf/ukf.hpp"

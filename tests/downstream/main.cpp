@@ -1,7 +1,9 @@
-// Built against the installed package: the umbrella header and one filter step of each kind.
+// Built against the installed package: both umbrella headers (the core and the paper layer) and one
+// filter step of each kind.
 #include <cstdio>
 
 #include <mjukf/mjukf.hpp>
+#include <mjukf/paper/paper.hpp>
 
 int main() {
   using Tank = mjukf::paper::CoupledTankExperiment<double>;

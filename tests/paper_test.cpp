@@ -1,12 +1,15 @@
-// The paper's schedule (algorithms.md §7): which call happens at which row, and where a refused step
-// stops the run.
+// The paper layer: the schedule (algorithms.md §7), which call happens at which row and where a
+// refused step stops the run, and the RMSE (§8).
 
+#include <cmath>
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
 #include <gtest/gtest.h>
 
-#include "mjukf/paper_schedule.hpp"
+#include "mjukf/paper/rmse.hpp"
+#include "mjukf/paper/schedule.hpp"
 #include "mjukf/status.hpp"
 
 namespace {
@@ -32,7 +35,7 @@ struct RecordingFilter {
 TEST(PaperSchedule, TimeAndMeasurementUpdateEveryNthStepOpenLoopOtherwise) {
   RecordingFilter filter;
   std::vector<long> recorded;
-  const auto outcome = mjukf::runPaperSchedule(
+  const auto outcome = mjukf::paper::runSchedule(
       filter, 8, 0.5, 3, [](long k) { return k; }, [&](long k, const RecordingFilter&) { recorded.push_back(k); });
   EXPECT_EQ(outcome.status, Status::Ok);
   EXPECT_EQ(outcome.row, 7);
@@ -48,7 +51,7 @@ TEST(PaperSchedule, StopsAtTheFirstRefusedStep) {
   RecordingFilter filter;
   filter.refuseAt = 3;  // the measurement update with y_3
   std::vector<long> recorded;
-  const auto outcome = mjukf::runPaperSchedule(
+  const auto outcome = mjukf::paper::runSchedule(
       filter, 8, 0.5, 3, [](long k) { return k; }, [&](long k, const RecordingFilter&) { recorded.push_back(k); });
   EXPECT_EQ(outcome.status, Status::NonFiniteResult);
   EXPECT_EQ(outcome.row, 3);
@@ -57,7 +60,7 @@ TEST(PaperSchedule, StopsAtTheFirstRefusedStep) {
 }
 
 TEST(PaperSchedule, RmseAccumulatorIsTheRootMeanSquare) {
-  mjukf::RmseAccumulator<double, 2> rmse;
+  mjukf::paper::RmseAccumulator<double, 2> rmse;
   rmse.add(Eigen::Vector2d(1.0, 0.0), Eigen::Vector2d(0.0, 0.0));
   rmse.add(Eigen::Vector2d(-1.0, 2.0), Eigen::Vector2d(0.0, 0.0));
   rmse.add(Eigen::Vector2d(2.0, 4.0), Eigen::Vector2d(1.0, 2.0));

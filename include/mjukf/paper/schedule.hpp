@@ -1,15 +1,11 @@
 #pragma once
 
 /// \file
-/// The schedule of the paper's experiments (algorithms.md §7) and its accuracy metric (§8).
-
-#include <cmath>
-
-#include <Eigen/Core>
+/// The schedule of the paper's experiments (algorithms.md §7).
 
 #include "mjukf/status.hpp"
 
-namespace mjukf {
+namespace mjukf::paper {
 
 /// Where a scheduled run stopped: Status::Ok after the last row, otherwise the status of the refused
 /// step and the row whose estimate it would have produced; and how many steps were taken with a
@@ -31,8 +27,8 @@ struct ScheduleOutcome {
 /// and after a measurement the gate rejected (the time update before it stands; both are counted),
 /// and stops at the first other refused step.
 template <class Filter, class MeasurementAt, class Record>
-ScheduleOutcome runPaperSchedule(Filter& filter, long rows, typename Filter::Scalar h, int measurementEvery,
-                                 MeasurementAt&& measurementAt, Record&& record) {
+ScheduleOutcome runSchedule(Filter& filter, long rows, typename Filter::Scalar h, int measurementEvery,
+                            MeasurementAt&& measurementAt, Record&& record) {
   using Scalar = typename Filter::Scalar;
   ScheduleOutcome outcome;
   if (rows < 1) return outcome;
@@ -67,27 +63,4 @@ ScheduleOutcome runPaperSchedule(Filter& filter, long rows, typename Filter::Sca
   return outcome;
 }
 
-/// Root-mean-square error of a parameter vector against its truth, accumulated row by row (eq. 16).
-/// The squares are summed in double even for float estimates: a float sum over the tank's 180 000 rows
-/// would lose about 1% to rounding.
-template <class Scalar, int Dim>
-class RmseAccumulator {
- public:
-  using Vector = Eigen::Matrix<Scalar, Dim, 1>;
-
-  void add(const Vector& estimate, const Vector& truth) {
-    sumOfSquares_ += (estimate - truth).template cast<double>().array().square().matrix();
-    ++count_;
-  }
-  /// The RMSE of each component over the rows added so far (NaN before the first row).
-  Vector value() const {
-    return (sumOfSquares_ / double(count_)).array().sqrt().matrix().template cast<Scalar>();
-  }
-  long count() const { return count_; }
-
- private:
-  Eigen::Matrix<double, Dim, 1> sumOfSquares_ = Eigen::Matrix<double, Dim, 1>::Zero();
-  long count_ = 0;
-};
-
-}  // namespace mjukf
+}  // namespace mjukf::paper
