@@ -7,7 +7,7 @@
 
 namespace mjukf {
 
-/// Diagnostics of a measurement update (algorithms.md §3). Zero until the first successful update;
+/// Diagnostics of a measurement update (docs/algorithms.md §3). Zero until the first successful update;
 /// a refused update leaves them as they were.
 template <class Scalar, int MeasDim>
 struct UpdateDiagnostics {

@@ -1,7 +1,7 @@
 #pragma once
 
 /// \file
-/// Scaled sigma points of van der Merwe (algorithms.md §1).
+/// Scaled sigma points of van der Merwe (docs/algorithms.md §1).
 
 #include <cmath>
 

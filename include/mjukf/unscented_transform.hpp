@@ -1,7 +1,7 @@
 #pragma once
 
 /// \file
-/// Weighted moments of sigma-point sets: the unscented transform (algorithms.md §2–3).
+/// Weighted moments of sigma-point sets: the unscented transform (docs/algorithms.md §2–3).
 ///
 /// All functions take fixed-size Eigen matrices whose columns are the points, write into output
 /// arguments and allocate nothing.

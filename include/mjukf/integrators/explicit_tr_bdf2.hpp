@@ -8,7 +8,7 @@
 namespace mjukf {
 
 /// One step of an explicit TR-BDF2 that reaches second order at I-TR-BDF2's cost of three evaluations
-/// of f per step (algorithms.md §6 describes I-TR-BDF2; this variant differs only in the slopes):
+/// of f per step (docs/algorithms.md §6 describes I-TR-BDF2; this variant differs only in the slopes):
 ///
 ///     k₁ = f(t, x)
 ///     k₂ = f(t + γh, x + γh k₁)                                   Euler predictor to t + γh

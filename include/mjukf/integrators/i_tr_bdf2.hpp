@@ -1,7 +1,7 @@
 #pragma once
 
 /// \file
-/// I-TR-BDF2, the explicit predictor-based TR-BDF2 of the paper's reference scripts (algorithms.md §6).
+/// I-TR-BDF2, the explicit predictor-based TR-BDF2 of the paper's reference scripts (docs/algorithms.md §6).
 
 #include <cmath>
 

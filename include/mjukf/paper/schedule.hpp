@@ -1,7 +1,7 @@
 #pragma once
 
 /// \file
-/// The schedule of the paper's experiments (algorithms.md §7).
+/// The schedule of the paper's experiments (docs/algorithms.md §7).
 
 #include "mjukf/status.hpp"
 
