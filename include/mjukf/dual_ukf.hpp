@@ -73,15 +73,10 @@ class DualUkf : public detail::UnscentedEngine<DualUkf<Model_, Integrator_>, Mod
   friend Engine;
 
  public:
-  using typename Engine::Input;
-  using typename Engine::Meas;
-  using typename Engine::Param;
-  using typename Engine::Scalar;
-  using typename Engine::State;
+  using typename Engine::Input, typename Engine::Meas, typename Engine::Param, typename Engine::Scalar,
+      typename Engine::State;
   using Settings = DualUkfSettings<Model_>;
-  static constexpr int StateDim = Engine::StateDim;
-  static constexpr int ParamDim = Engine::ParamDim;
-  static constexpr int MeasDim = Engine::MeasDim;
+  using Engine::StateDim, Engine::ParamDim, Engine::MeasDim;
   static constexpr int SigmaPointCount = 2 * StateDim + 1;           ///< of the state filter
   static constexpr int ParameterSigmaPointCount = 2 * ParamDim + 1;  ///< of the parameter filter
   using StateMatrix = Eigen::Matrix<Scalar, StateDim, StateDim>;
@@ -148,14 +143,12 @@ class DualUkf : public detail::UnscentedEngine<DualUkf<Model_, Integrator_>, Mod
   };
 
   static const State& checked(const State& initialState, const Param& initialParameters, const Settings& settings) {
-    detail::requireFinite(kOwner, "initialState", initialState);
-    detail::requireFinite(kOwner, "initialParameters", initialParameters);
+    detail::checkInitialValues(kOwner, initialState, initialParameters, settings.parameterBounds);
     detail::requirePositiveDefinite(kOwner, "initialParameterCovariance", settings.initialParameterCovariance);
     detail::requirePositiveSemiDefinite(kOwner, "parameterProcessNoise", settings.parameterProcessNoise);
     detail::requirePositiveSemiDefinite(kOwner, "parameterObservationNoise", settings.parameterObservationNoise);
     if (!(settings.parameterForgetting > 0 && settings.parameterForgetting <= 1))
       detail::throwInvalid(kOwner, "parameterForgetting", "must lie in (0, 1]");
-    detail::validateBounds(kOwner, settings.parameterBounds, initialParameters);
     return initialState;
   }
 

@@ -39,12 +39,9 @@ class JointUkf : public detail::UnscentedEngine<JointUkf<Model_, Integrator_>, M
   friend Engine;
 
  public:
-  using typename Engine::Param;
-  using typename Engine::Scalar;
-  using typename Engine::State;
+  using typename Engine::Param, typename Engine::Scalar, typename Engine::State;
   using Settings = JointUkfSettings<Model_>;
-  static constexpr int StateDim = Engine::StateDim;
-  static constexpr int ParamDim = Engine::ParamDim;
+  using Engine::StateDim, Engine::ParamDim;
   static constexpr int AugmentedDim = StateDim + ParamDim;
   static constexpr int SigmaPointCount = 2 * AugmentedDim + 1;
   using AugmentedState = Eigen::Matrix<Scalar, AugmentedDim, 1>;

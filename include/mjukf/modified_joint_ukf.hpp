@@ -61,14 +61,9 @@ class ModifiedJointUkf
   friend Engine;
 
  public:
-  using typename Engine::Meas;
-  using typename Engine::Param;
-  using typename Engine::Scalar;
-  using typename Engine::State;
+  using typename Engine::Meas, typename Engine::Param, typename Engine::Scalar, typename Engine::State;
   using Settings = ModifiedJointUkfSettings<Model_>;
-  static constexpr int StateDim = Engine::StateDim;
-  static constexpr int ParamDim = Engine::ParamDim;
-  static constexpr int MeasDim = Engine::MeasDim;
+  using Engine::StateDim, Engine::ParamDim, Engine::MeasDim;
   static constexpr int SigmaPointCount = 2 * StateDim + 1;
   using StateMatrix = Eigen::Matrix<Scalar, StateDim, StateDim>;
   using Transformation = Eigen::Matrix<Scalar, ParamDim, MeasDim>;
@@ -112,8 +107,7 @@ class ModifiedJointUkf
   static constexpr const char* kOwner = "mjukf::ModifiedJointUkf";
 
   static const State& checked(const State& initialState, const Param& initialParameters, const Settings& settings) {
-    detail::requireFinite(kOwner, "initialState", initialState);
-    detail::requireFinite(kOwner, "initialParameters", initialParameters);
+    detail::checkInitialValues(kOwner, initialState, initialParameters, settings.parameterBounds);
     detail::requireFinite(kOwner, "scaling (xi)", settings.scaling);
     detail::requireFinite(kOwner, "transformation (T)", settings.transformation);
     detail::requireFinite(kOwner, "parameterSpread (p_theta)", settings.parameterSpread);
@@ -123,7 +117,6 @@ class ModifiedJointUkf
     const Scalar tolerance = Scalar(1000) * Eigen::NumTraits<Scalar>::epsilon() * Scalar(MeasDim);
     if ((rowSums.array() - Scalar(1)).abs().maxCoeff() > tolerance)
       detail::throwInvalid(kOwner, "transformation (T)", "must have rows that each sum to 1");
-    detail::validateBounds(kOwner, settings.parameterBounds, initialParameters);
     return initialState;
   }
 

@@ -57,5 +57,14 @@ void validateBounds(const char* owner, const ParameterBounds<Scalar, ParamDim>& 
     throwInvalid(owner, initialName, "must lie within parameterBounds");
 }
 
+// The initial values of a filter that estimates parameters: finite, and the parameters in the bounds.
+template <class State, class Param, class Scalar, int ParamDim>
+void checkInitialValues(const char* owner, const State& initialState, const Param& initialParameters,
+                        const ParameterBounds<Scalar, ParamDim>& bounds) {
+  requireFinite(owner, "initialState", initialState);
+  requireFinite(owner, "initialParameters", initialParameters);
+  validateBounds(owner, bounds, initialParameters);
+}
+
 }  // namespace detail
 }  // namespace mjukf

@@ -35,9 +35,7 @@ class Ukf : public detail::UnscentedEngine<Ukf<Model_, Integrator_>, Model_, Int
   friend Engine;
 
  public:
-  using typename Engine::Param;
-  using typename Engine::Scalar;
-  using typename Engine::State;
+  using typename Engine::Param, typename Engine::Scalar, typename Engine::State;
   using Settings = UkfSettings<Model_>;
   using StateMatrix = Eigen::Matrix<Scalar, Engine::StateDim, Engine::StateDim>;
   static constexpr int SigmaPointCount = 2 * Engine::StateDim + 1;
