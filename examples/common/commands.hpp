@@ -53,7 +53,14 @@ inline FilterKind parseFilterKind(const std::string& name) {
   if (name == "ukf") return FilterKind::Ukf;
   if (name == "jukf") return FilterKind::JointUkf;
   if (name == "mjukf") return FilterKind::ModifiedJointUkf;
-  throw UsageError("--filter must be ukf, jukf or mjukf, not '" + name + "'");
+  if (name == "dual") return FilterKind::DualUkf;
+  throw UsageError("--filter must be ukf, jukf, mjukf or dual, not '" + name + "'");
+}
+
+inline DualUkfOrdering parseOrdering(const std::string& name) {
+  if (name == "prior") return DualUkfOrdering::PriorParameters;
+  if (name == "updated") return DualUkfOrdering::UpdatedParameters;
+  throw UsageError("--ordering must be prior or updated, not '" + name + "'");
 }
 
 // A diagonal from one number (every entry) or a comma-separated list of all the entries.
@@ -74,7 +81,8 @@ void overrideVector(const Arguments& args, const std::string& flag, Vector& vect
   for (std::size_t i = 0; i < values.size(); ++i) vector(long(i)) = values[i];
 }
 
-// --p0, --q and --r: the same three diagonals in every filter's settings.
+// --p0, --q and --r: the same three diagonals in every filter's settings (the dual's state filter's;
+// its parameter filter observes with R plus its own parameterObservationNoise, --r-theta).
 template <class Settings>
 void overrideCovariances(const Arguments& args, Settings& settings) {
   overrideDiagonal(args, "--p0", settings.initialCovariance);
@@ -94,15 +102,20 @@ FilterSetup<Experiment> filterSetup(const Arguments& args) {
   const bool ukf = setup.kind == FilterKind::Ukf;
   const bool jukf = setup.kind == FilterKind::JointUkf;
   const bool mjukf = setup.kind == FilterKind::ModifiedJointUkf;
+  const bool dual = setup.kind == FilterKind::DualUkf;
   requireFilter(args, "--xi", mjukf, "mjukf");
   requireFilter(args, "--transform", mjukf, "mjukf");
   requireFilter(args, "--p-theta", mjukf, "mjukf");
+  requireFilter(args, "--ordering", dual, "dual");
+  requireFilter(args, "--r-theta", dual, "dual");
 
   setup.measurementEvery =
       static_cast<int>(args.integer("--every", setup.measurementEvery, 1, std::numeric_limits<int>::max()));
   overrideVector(args, "--x0", setup.initialState);
   overrideVector(args, "--theta0", setup.initialParameters);
-  for (auto* sigma : {&setup.ukf.sigmaPoints, &setup.jointUkf.sigmaPoints, &setup.modifiedJointUkf.sigmaPoints}) {
+  // The dual UKF's two filters (state and parameters) take the same α, β, κ.
+  for (auto* sigma : {&setup.ukf.sigmaPoints, &setup.jointUkf.sigmaPoints, &setup.modifiedJointUkf.sigmaPoints,
+                      &setup.dualUkf.sigmaPoints, &setup.dualUkf.parameterSigmaPoints}) {
     sigma->alpha = args.number("--alpha", sigma->alpha);
     sigma->beta = args.number("--beta", sigma->beta);
     sigma->kappa = args.number("--kappa", sigma->kappa);
@@ -111,6 +124,11 @@ FilterSetup<Experiment> filterSetup(const Arguments& args) {
     overrideCovariances(args, setup.ukf);
   } else if (jukf) {
     overrideCovariances(args, setup.jointUkf);
+  } else if (dual) {
+    auto& s = setup.dualUkf;
+    overrideCovariances(args, s);
+    overrideDiagonal(args, "--r-theta", s.parameterObservationNoise);
+    if (args.has("--ordering")) s.ordering = parseOrdering(args.text("--ordering"));
   } else {
     auto& s = setup.modifiedJointUkf;
     overrideCovariances(args, s);
@@ -128,14 +146,14 @@ FilterSetup<Experiment> filterSetup(const Arguments& args) {
 
 }  // namespace detail
 
-/// estimate --filter ukf|jukf|mjukf --data FILE --out FILE [--xi X] [--every N] [more settings]
+/// estimate --filter ukf|jukf|mjukf|dual --data FILE --out FILE [--xi X] [--ordering O] [--every N] [more settings]
 template <class Plant>
 int estimateCommand(const std::vector<std::string>& words) {
   using Experiment = typename Plant::Experiment;
   using Model = typename Experiment::Model;
   const Arguments args(words, {"--filter", "--data", "--out", "--xi", "--every", "--step", "--rmse-from", "--x0",
                                "--theta0", "--alpha", "--beta", "--kappa", "--p0", "--q", "--r", "--p-theta",
-                               "--transform"});
+                               "--transform", "--ordering", "--r-theta"});
   const auto setup = detail::filterSetup<Experiment>(args);
   const std::string dataPath = args.requiredText("--data");
   const std::string out = args.requiredText("--out");
@@ -152,7 +170,9 @@ int estimateCommand(const std::vector<std::string>& words) {
   }
   writeEstimates(out, run, h);
 
-  std::printf("%s on %s: %ld rows, h = %g s, a measurement every %d steps\n", filterName(setup.kind),
+  const bool updated = setup.dualUkf.ordering == DualUkfOrdering::UpdatedParameters;
+  std::printf("%s%s on %s: %ld rows, h = %g s, a measurement every %d steps\n", filterName(setup.kind),
+              setup.kind != FilterKind::DualUkf ? "" : updated ? " (ordering: updated)" : " (ordering: prior)",
               dataPath.c_str(), data.rows(), h, setup.measurementEvery);
   if (run.outcome.status != Status::Ok) {
     std::printf("error: the filter refused the step to row %ld (t = %g s): %s; %s holds rows 0-%ld only\n",

@@ -2,7 +2,9 @@
 
 // The `paper` subcommand: JUKF and MJUKF with the paper's settings on one data set, the analogue of
 // the paper's Table 3 / Table 4 next to the published values, and figures like the paper's; for a
-// plant with a parameter-change scenario also that scenario (the robot's Figs. 12–14).
+// plant with a parameter-change scenario also that scenario (the robot's Figs. 12–14). Beside them
+// runs the dual UKF with the library's settings (Experiment::dualUkf()): the paper has no dual filter,
+// so its column has no published value.
 
 #include <algorithm>
 #include <cstdarg>
@@ -15,6 +17,7 @@
 #include <stdexcept>
 #include <string>
 #include <system_error>
+#include <utility>
 #include <vector>
 
 #include "common/cli.hpp"
@@ -50,37 +53,45 @@ template <class Model>
 struct Comparison {
   EstimateRun<Model> jointUkf;
   EstimateRun<Model> modifiedJointUkf;
+  EstimateRun<Model> dualUkf;
   double jointUkfSeconds = 0;  // median loop time
   double modifiedJointUkfSeconds = 0;
+  double dualUkfSeconds = 0;
   long rmseFrom = 0;  // first row of the RMSE window (row 0 for a run shorter than the paper's window)
   typename Model::Param jointUkfRmse;
   typename Model::Param modifiedJointUkfRmse;
+  typename Model::Param dualUkfRmse;
 };
 
-// Runs both filters `runs` times, alternating so that a slow spell of the machine hits both alike.
+// Runs the three filters `runs` times, alternating so that a slow spell of the machine hits all alike.
 template <class Experiment>
 Comparison<typename Experiment::Model> compareFilters(const PlantData<typename Experiment::Model>& data,
                                                       const FilterSetup<Experiment>& jointUkf,
-                                                      const FilterSetup<Experiment>& modifiedJointUkf, long runs) {
+                                                      const FilterSetup<Experiment>& modifiedJointUkf,
+                                                      const FilterSetup<Experiment>& dualUkf, long runs) {
   using Model = typename Experiment::Model;
   Comparison<Model> result;
-  std::vector<double> jointTimes, modifiedTimes;
+  std::vector<double> jointTimes, modifiedTimes, dualTimes;
   for (long r = 0; r < runs; ++r) {
     result.jointUkf = runFilter(Model(), jointUkf, data);
     result.modifiedJointUkf = runFilter(Model(), modifiedJointUkf, data);
-    for (const auto* run : {&result.jointUkf, &result.modifiedJointUkf})
+    result.dualUkf = runFilter(Model(), dualUkf, data);
+    for (const auto& [run, name] : {std::pair{&result.jointUkf, "JUKF"}, std::pair{&result.modifiedJointUkf, "MJUKF"},
+                                    std::pair{&result.dualUkf, "the dual UKF"}})
       if (run->outcome.status != Status::Ok)
-        throw std::runtime_error(std::string(run == &result.jointUkf ? "JUKF" : "MJUKF") +
-                                 " refused the step to row " + std::to_string(run->outcome.row) + ": " +
-                                 toString(run->outcome.status));
+        throw std::runtime_error(std::string(name) + " refused the step to row " + std::to_string(run->outcome.row) +
+                                 ": " + toString(run->outcome.status));
     jointTimes.push_back(result.jointUkf.loopSeconds);
     modifiedTimes.push_back(result.modifiedJointUkf.loopSeconds);
+    dualTimes.push_back(result.dualUkf.loopSeconds);
   }
   result.jointUkfSeconds = median(jointTimes);
   result.modifiedJointUkfSeconds = median(modifiedTimes);
+  result.dualUkfSeconds = median(dualTimes);
   result.rmseFrom = Experiment::rmseFromRow < data.rows() ? Experiment::rmseFromRow : 0;
   result.jointUkfRmse = parameterRmse(result.jointUkf, data, result.rmseFrom);
   result.modifiedJointUkfRmse = parameterRmse(result.modifiedJointUkf, data, result.rmseFrom);
+  result.dualUkfRmse = parameterRmse(result.dualUkf, data, result.rmseFrom);
   return result;
 }
 
@@ -98,10 +109,11 @@ int estimateParameterColumn(int i) {
 inline std::string withUnit(const Quantity& q) { return std::string(q.label) + " (" + q.unit + ")"; }
 inline std::string rmseLabel(const Quantity& q) { return "RMSE " + std::string(q.name) + " (" + q.unit + ")"; }
 
-// Parameter estimates of both filters against the truth, one panel per parameter.
+// Parameter estimates of the three filters against the truth, one panel per parameter.
 template <class Plant, class Model>
 Figure parameterFigure(const std::string& png, const std::string& title, const std::string& dataFile,
-                       const PlantData<Model>& data, const std::string& jointFile, const std::string& modifiedFile) {
+                       const PlantData<Model>& data, const std::string& jointFile, const std::string& modifiedFile,
+                       const std::string& dualFile) {
   Figure figure{png, title, Model::ParamDim, 1, 1000, 380 * Model::ParamDim, {}};
   const int every = std::max(1, static_cast<int>(data.rows() / 4000));
   for (int i = 0; i < Model::ParamDim; ++i) {
@@ -110,12 +122,13 @@ Figure parameterFigure(const std::string& png, const std::string& title, const s
         {std::string(q.label) + " estimates", "time t (s)", withUnit(q),
          {{jointFile, 1, estimateParameterColumn<Model>(i), "JUKF", "lines lw 1.5 lc rgb '#1f77b4'", every},
           {modifiedFile, 1, estimateParameterColumn<Model>(i), "MJUKF", "lines lw 1.5 lc rgb '#d62728'", every},
+          {dualFile, 1, estimateParameterColumn<Model>(i), "dual", "lines lw 1.5 lc rgb '#2ca02c'", every},
           {dataFile, 1, dataParameterColumn(data, i), "truth", "lines lw 2 dt 2 lc rgb 'black'", every}}});
   }
   return figure;
 }
 
-// State estimates of both filters against the measurements, one panel per state.
+// State estimates of JUKF and MJUKF against the measurements, one panel per state.
 template <class Plant, class Model>
 Figure stateFigure(const std::string& png, const std::string& title, const std::string& dataFile,
                    const PlantData<Model>& data, const std::string& jointFile, const std::string& modifiedFile) {
@@ -135,21 +148,24 @@ Figure stateFigure(const std::string& png, const std::string& title, const std::
   return figure;
 }
 
-// Writes the data and both filters' estimates (`<prefix>data.csv`, `<prefix>jukf.csv`, `<prefix>mjukf.csv`)
-// and draws `<prefix>parameters.png` and `<prefix>states.png`, adding every file made to `written`.
+// Writes the data and the filters' estimates (`<prefix>data.csv`, `<prefix>jukf.csv`, `<prefix>mjukf.csv`,
+// `<prefix>dual.csv`) and draws `<prefix>parameters.png` (all three filters) and `<prefix>states.png`
+// (JUKF and MJUKF), adding every file made to `written`.
 template <class Plant, class Model, class Path>
 void writeComparison(const Path& path, const std::string& prefix, const PlantData<Model>& data,
                      const Comparison<Model>& result, const std::string& parameterTitle, const std::string& stateTitle,
                      Plotter& plotter, std::vector<std::string>& written) {
   const std::string dataFile = path(prefix + "data.csv"), jointFile = path(prefix + "jukf.csv"),
-                    modifiedFile = path(prefix + "mjukf.csv");
+                    modifiedFile = path(prefix + "mjukf.csv"), dualFile = path(prefix + "dual.csv");
   writePlantData(dataFile, data);
   writeEstimates(jointFile, result.jointUkf, data.stepSize);
   writeEstimates(modifiedFile, result.modifiedJointUkf, data.stepSize);
-  written.insert(written.end(), {dataFile, jointFile, modifiedFile});
+  writeEstimates(dualFile, result.dualUkf, data.stepSize);
+  written.insert(written.end(), {dataFile, jointFile, modifiedFile, dualFile});
   const std::string title = std::string(Plant::title) + ": ";
   const std::string parameters = path(prefix + "parameters.png"), states = path(prefix + "states.png");
-  if (plotter.draw(parameterFigure<Plant>(parameters, title + parameterTitle, dataFile, data, jointFile, modifiedFile)))
+  if (plotter.draw(
+          parameterFigure<Plant>(parameters, title + parameterTitle, dataFile, data, jointFile, modifiedFile, dualFile)))
     written.push_back(parameters);
   if (plotter.draw(stateFigure<Plant>(states, title + stateTitle, dataFile, data, jointFile, modifiedFile)))
     written.push_back(states);
@@ -212,12 +228,14 @@ int paperCommand(const std::vector<std::string>& words) {
     report += line + "\n";
   };
 
-  // The paper's table: JUKF and MJUKF, the paper's settings, on one data set.
+  // The paper's table: JUKF and MJUKF, the paper's settings, on one data set; beside them the dual UKF
+  // with the library's settings (no published value: the paper has no dual filter).
   std::string description;
   const auto data = detail::paperData<Plant>(args.text("--data"), duration, seed, {Model::trueParameters()}, description);
   const auto jointSetup = FilterSetup<Experiment>::paper(FilterKind::JointUkf);
   const auto modifiedSetup = FilterSetup<Experiment>::paper(FilterKind::ModifiedJointUkf);
-  const auto result = detail::compareFilters(data, jointSetup, modifiedSetup, runs);
+  const auto dualSetup = FilterSetup<Experiment>::paper(FilterKind::DualUkf);
+  const auto result = detail::compareFilters(data, jointSetup, modifiedSetup, dualSetup, runs);
 
   const auto& paper = Plant::published;
   const auto& reference = Plant::reference;
@@ -225,17 +243,21 @@ int paperCommand(const std::vector<std::string>& words) {
   say(format("data: %s, %ld rows; RMSE over t >= %g s; time: median of %ld runs of the estimation loop",
              description.c_str(), data.rows(), double(result.rmseFrom) * Experiment::stepSize, runs));
   say("");
-  say(format("%-26s %-24s %-24s", "", "this library (C++)", (std::string("paper ") + Plant::table).c_str()));
-  say(format("%-26s %-11s %-12s %-11s %-12s", "", "JUKF", "MJUKF", "JUKF", "MJUKF"));
+  say(format("%-26s %-37s %-37s", "", "this library (C++)", (std::string("paper ") + Plant::table).c_str()));
+  say(format("%-26s %-11s %-12s %-12s %-11s %-12s %-12s", "", "JUKF", "MJUKF", "dual", "JUKF", "MJUKF", "dual"));
   for (int i = 0; i < Model::ParamDim; ++i) {
     const Quantity& q = Plant::parameters[std::size_t(i)];
-    say(format("%-26s %-11.7f %-12.7f %-11.5g %-12.5g", detail::rmseLabel(q).c_str(), result.jointUkfRmse(i),
-               result.modifiedJointUkfRmse(i), paper.jukfRmse[std::size_t(i)], paper.mjukfRmse[std::size_t(i)]));
+    say(format("%-26s %-11.7f %-12.7f %-12.7f %-11.5g %-12.5g %-12s", detail::rmseLabel(q).c_str(),
+               result.jointUkfRmse(i), result.modifiedJointUkfRmse(i), result.dualUkfRmse(i),
+               paper.jukfRmse[std::size_t(i)], paper.mjukfRmse[std::size_t(i)], "-"));
   }
-  say(format("%-26s %-11.4g %-12.4g %-11.5g %-12.5g", "time (s)", result.jointUkfSeconds,
-             result.modifiedJointUkfSeconds, paper.jukfSeconds, paper.mjukfSeconds));
-  say(format("%-26s %-24.3f %-24.3f", "time MJUKF / JUKF", result.modifiedJointUkfSeconds / result.jointUkfSeconds,
+  say(format("%-26s %-11.4g %-12.4g %-12.4g %-11.5g %-12.5g %-12s", "time (s)", result.jointUkfSeconds,
+             result.modifiedJointUkfSeconds, result.dualUkfSeconds, paper.jukfSeconds, paper.mjukfSeconds, "-"));
+  say(format("%-26s %-37.3f %-37.3f", "time MJUKF / JUKF", result.modifiedJointUkfSeconds / result.jointUkfSeconds,
              paper.mjukfSeconds / paper.jukfSeconds));
+  say(format("%-26s %-37.3f %-37s", "time dual / JUKF", result.dualUkfSeconds / result.jointUkfSeconds, "-"));
+  say("dual: the library's dual UKF (its own settings, Experiment::dualUkf()); the paper has no dual filter,");
+  say("  so there is no published value (-)");
   say("");
   std::string conformance = "conformance RMSEs on the reference file (independent implementation): JUKF";
   for (double v : reference.jukfRmse) conformance += format(" %.10g", v);
@@ -259,7 +281,7 @@ int paperCommand(const std::vector<std::string>& words) {
         detail::paperData<Plant>(args.text("--change-data"), changeDuration, seed, truth, changeDescription);
     auto changeModified = modifiedSetup;
     changeModified.modifiedJointUkf.scaling = change->scaling;
-    const auto changeResult = detail::compareFilters(changeData, jointSetup, changeModified, 1);
+    const auto changeResult = detail::compareFilters(changeData, jointSetup, changeModified, dualSetup, 1);
     say("");
     std::string what;
     for (int i = 0; i < Model::ParamDim; ++i)
@@ -268,13 +290,15 @@ int paperCommand(const std::vector<std::string>& words) {
                change->at, change->scaling));
     say(format("data: %s, %ld rows; RMSE over t >= %g s against the changing truth", changeDescription.c_str(),
                changeData.rows(), double(changeResult.rmseFrom) * Experiment::stepSize));
-    say(format("%-26s %-11s %-12s", "", "JUKF", "MJUKF"));
+    say(format("%-26s %-11s %-12s %-12s", "", "JUKF", "MJUKF", "dual"));
     for (int i = 0; i < Model::ParamDim; ++i) {
       const Quantity& q = Plant::parameters[std::size_t(i)];
-      say(format("%-26s %-11.7f %-12.7f", detail::rmseLabel(q).c_str(), changeResult.jointUkfRmse(i),
-                 changeResult.modifiedJointUkfRmse(i)));
-      say(format("%-26s %-11.5f %-12.5f", ("final " + std::string(q.name) + format(" (truth %g)", truth.after(i))).c_str(),
-                 changeResult.jointUkf.parameters.back()(i), changeResult.modifiedJointUkf.parameters.back()(i)));
+      say(format("%-26s %-11.7f %-12.7f %-12.7f", detail::rmseLabel(q).c_str(), changeResult.jointUkfRmse(i),
+                 changeResult.modifiedJointUkfRmse(i), changeResult.dualUkfRmse(i)));
+      say(format("%-26s %-11.5f %-12.5f %-12.5f",
+                 ("final " + std::string(q.name) + format(" (truth %g)", truth.after(i))).c_str(),
+                 changeResult.jointUkf.parameters.back()(i), changeResult.modifiedJointUkf.parameters.back()(i),
+                 changeResult.dualUkf.parameters.back()(i)));
     }
     detail::writeComparison<Plant>(path, "change_", changeData, changeResult,
                                    "parameter estimates with a parameter change",

@@ -1,6 +1,7 @@
 // The example programs end to end, run as a user runs them: every subcommand on a short horizon,
-// `estimate` against the conformance RMSEs on the reference files, `simulate` followed by `estimate`,
-// and the error paths (malformed CSV → exit 2 with the line number; bad command line → usage, 64).
+// `estimate` against the conformance RMSEs on the reference files, the dual UKF on the same files,
+// `simulate` followed by `estimate`, and the error paths (malformed CSV → exit 2 with the line number;
+// bad command line → usage, 64).
 
 #include <sys/wait.h>
 
@@ -8,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <regex>
 #include <string>
 #include <vector>
@@ -110,6 +112,99 @@ INSTANTIATE_TEST_SUITE_P(
         ConformanceCase{"RobotMjukf", &kRobot, "mjukf", "flexible_joint_reference.csv",
                         {0.006717243853, 0.008727060131}}),
     [](const auto& info) { return std::string(info.param.name); });
+
+// ---------------------------------------------------------------------------------------------
+// estimate --filter dual on the reference files. The paper has no dual filter, so there is no
+// conformance number: the RMSEs are asserted loosely, against what a filter that learned something
+// must beat. Printed by `estimate` on this machine (docs/reproducing-the-paper.md):
+//   tank,  prior:   rmse_theta1 3.791132388                      (final k_flow 2.50968, truth 6)
+//   tank,  updated: rmse_theta1 3.791132389
+//   robot, prior:   rmse_theta1 0.006710709652, rmse_theta2 0.009822916915
+//   robot, updated: rmse_theta1 0.006587243043, rmse_theta2 0.009692712986
+// The tank's dual, observing with R plus the data's noise variance (the preset), learns slowly: after
+// 200 s it has moved from the first guess 2 only to 2.51, so its RMSE is just below the first guess's
+// error of 4, and the test checks that it moved towards the truth. The robot's dual beats JUKF's
+// conformance RMSEs (0.0267, 0.0343), themselves below the first guess's errors (0.05, 0.06).
+
+struct DualCase {
+  const char* name;
+  const std::string* program;
+  const char* ordering;
+  const char* file;
+  std::vector<double> bound;  // each RMSE must be below this
+};
+void PrintTo(const DualCase& c, std::ostream* os) { *os << c.name; }
+
+class DualEstimate : public ::testing::TestWithParam<DualCase> {};
+
+TEST_P(DualEstimate, RunsAndLearnsTheParameters) {
+  const auto& c = GetParam();
+  const std::string data = kData + "/" + c.file;
+  const std::string out = scratch("estimates.csv");
+  const Result r = run(*c.program + " estimate --filter dual --ordering " + c.ordering + " --data " + data +
+                       " --out " + out);
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_NE(r.output.find(std::string("dual (ordering: ") + c.ordering + ") on "), std::string::npos) << r.output;
+  for (std::size_t i = 0; i < c.bound.size(); ++i) {
+    const double rmse = printed(r.output, "rmse_theta" + std::to_string(i + 1));
+    EXPECT_TRUE(std::isfinite(rmse)) << r.output;
+    EXPECT_GT(rmse, 0.0) << r.output;
+    EXPECT_LT(rmse, c.bound[i]) << "theta" << i + 1 << "\n" << r.output;
+  }
+  const auto estimates = readCsv(out);
+  ASSERT_EQ(estimates.rows(), readCsv(data).rows());
+  if (c.program == &kTank) {  // moved from the first guess 2 towards the truth 6, without passing it
+    const double last = estimates.column("theta1").back();
+    EXPECT_GT(last, 2.25) << r.output;
+    EXPECT_LT(last, 6.0) << r.output;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    ReferenceFiles, DualEstimate,
+    ::testing::Values(DualCase{"TankPrior", &kTank, "prior", "coupled_tank_reference.csv", {4.0}},
+                      DualCase{"TankUpdated", &kTank, "updated", "coupled_tank_reference.csv", {4.0}},
+                      DualCase{"RobotPrior", &kRobot, "prior", "flexible_joint_reference.csv",
+                               {0.02671036066, 0.03426798571}},
+                      DualCase{"RobotUpdated", &kRobot, "updated", "flexible_joint_reference.csv",
+                               {0.02671036066, 0.03426798571}}),
+    [](const auto& info) { return std::string(info.param.name); });
+
+// The default ordering is `prior`; `updated` is another filter (different RMSEs on the robot).
+TEST(Estimate, DualOrderingDefaultsToPriorAndMatters) {
+  const std::string data = kData + "/flexible_joint_reference.csv";
+  const std::string dual = kRobot + " estimate --filter dual --data " + data;
+  const Result byDefault = run(dual + " --out " + scratch("a.csv"));
+  const Result prior = run(dual + " --out " + scratch("b.csv") + " --ordering prior");
+  const Result updated = run(dual + " --out " + scratch("c.csv") + " --ordering updated");
+  ASSERT_EQ(byDefault.exitCode, 0) << byDefault.output;
+  ASSERT_EQ(prior.exitCode, 0) << prior.output;
+  ASSERT_EQ(updated.exitCode, 0) << updated.output;
+  EXPECT_NE(byDefault.output.find("dual (ordering: prior)"), std::string::npos) << byDefault.output;
+  for (const char* key : {"rmse_theta1", "rmse_theta2"}) {
+    EXPECT_EQ(printed(byDefault.output, key), printed(prior.output, key));
+    EXPECT_NE(printed(prior.output, key), printed(updated.output, key));
+  }
+}
+
+// --p0, --q and --r set the dual's state filter (the preset's are the UKF's: 0.5, 1e-5, 1e-3 on the
+// robot), --r-theta its parameter filter's added observation noise (0.05 in the preset).
+TEST(Estimate, DualSettingsAreOverridable) {
+  const std::string data = kData + "/flexible_joint_reference.csv";
+  const std::string dual = kRobot + " estimate --filter dual --data " + data;
+  const Result preset = run(dual + " --out " + scratch("a.csv"));
+  const Result same = run(dual + " --out " + scratch("b.csv") +
+                          " --p0 0.5,0.5,0.5,0.5 --q 1e-5 --r 1e-3 --r-theta 0.05 --theta0 0.1,0.15 --every 5");
+  const Result otherR = run(dual + " --out " + scratch("c.csv") + " --r 2e-3");
+  const Result otherQ = run(dual + " --out " + scratch("d.csv") + " --q 1e-4");
+  const Result otherRTheta = run(dual + " --out " + scratch("e.csv") + " --r-theta 1e-2");
+  for (const Result* r : {&preset, &same, &otherR, &otherQ, &otherRTheta}) ASSERT_EQ(r->exitCode, 0) << r->output;
+  EXPECT_EQ(printed(preset.output, "rmse_theta1"), printed(same.output, "rmse_theta1"));
+  for (const Result* r : {&otherR, &otherQ, &otherRTheta})
+    EXPECT_NE(printed(preset.output, "rmse_theta1"), printed(r->output, "rmse_theta1")) << r->output;
+  // Measured sensitivity (docs/reproducing-the-paper.md): --r-theta 1e-2 gives (0.0124, 0.0188).
+  EXPECT_NEAR(printed(otherRTheta.output, "rmse_theta1"), 0.01237670533, 1e-6 * 0.01237670533) << otherRTheta.output;
+}
 
 // ---------------------------------------------------------------------------------------------
 // simulate
@@ -262,14 +357,29 @@ TEST(Paper, TankPrintsTheTableAndWritesItsFiles) {
   const std::string dir = scratch("paper");
   const Result r = run(kTank + " paper --duration 3 --runs 3 --out-dir " + dir);
   ASSERT_EQ(r.exitCode, 0) << r.output;
-  for (const char* text : {"Table 3", "RMSE k_flow", "77.696", "71.191", "time MJUKF / JUKF", "median of 3 runs"})
+  for (const char* text : {"Table 3", "RMSE k_flow", "77.696", "71.191", "time MJUKF / JUKF", "median of 3 runs",
+                           "time dual / JUKF", "the paper has no dual filter", "no published value"})
     EXPECT_NE(r.output.find(text), std::string::npos) << text << "\n" << r.output;
-  for (const char* file : {"coupled_tank_data.csv", "coupled_tank_jukf.csv", "coupled_tank_mjukf.csv", "coupled_tank_table.txt"})
+  // The dual column beside JUKF and MJUKF, ours with a number, the paper's with none.
+  EXPECT_TRUE(std::regex_search(r.output, std::regex("JUKF +MJUKF +dual +JUKF +MJUKF +dual"))) << r.output;
+  EXPECT_TRUE(std::regex_search(
+      r.output, std::regex(R"(RMSE k_flow \(\(cm\^3/s\)/V\) +[0-9.]+ +[0-9.]+ +[0-9.]+ +0\.2919 +0\.2434 +- )")))
+      << r.output;
+  for (const char* file : {"coupled_tank_data.csv", "coupled_tank_jukf.csv", "coupled_tank_mjukf.csv",
+                           "coupled_tank_dual.csv", "coupled_tank_table.txt"})
     EXPECT_TRUE(fs::exists(fs::path(dir) / file)) << file;
   EXPECT_EQ(readCsv((fs::path(dir) / "coupled_tank_jukf.csv").string()).rows(), 3001u);
-  // With gnuplot the figures exist; without it the program says so instead.
+  EXPECT_EQ(readCsv((fs::path(dir) / "coupled_tank_dual.csv").string()).rows(), 3001u);
+  // With gnuplot the figures exist, the parameter figure with the dual's curve; without it the program
+  // says so instead.
   const bool plotted = fs::exists(fs::path(dir) / "coupled_tank_parameters.png");
   EXPECT_TRUE(plotted || r.output.find("gnuplot") != std::string::npos) << r.output;
+  if (plotted) {
+    std::ifstream script(fs::path(dir) / "coupled_tank_parameters.gp");
+    const std::string text((std::istreambuf_iterator<char>(script)), std::istreambuf_iterator<char>());
+    EXPECT_NE(text.find("coupled_tank_dual.csv"), std::string::npos) << text;
+    EXPECT_NE(text.find("title \"dual\""), std::string::npos) << text;
+  }
 }
 
 TEST(Paper, RobotRunsBothScenariosOnTheGivenFiles) {
@@ -287,10 +397,19 @@ TEST(Paper, RobotRunsBothScenariosOnTheGivenFiles) {
   const Result r =
       run(kRobot + " paper --runs 2 --out-dir " + dir + " --data " + data + " --change-data " + change);
   ASSERT_EQ(r.exitCode, 0) << r.output;
-  for (const char* text : {"Table 4", "RMSE K_tau", "RMSE m", "4.337", "3.717", "parameter change", "xi = -0.0035"})
+  for (const char* text : {"Table 4", "RMSE K_tau", "RMSE m", "4.337", "3.717", "parameter change", "xi = -0.0035",
+                           "no published value"})
     EXPECT_NE(r.output.find(text), std::string::npos) << text << "\n" << r.output;
+  EXPECT_TRUE(std::regex_search(r.output, std::regex("JUKF +MJUKF +dual +JUKF +MJUKF +dual"))) << r.output;
+  EXPECT_TRUE(std::regex_search(r.output, std::regex(R"(RMSE m \(kg\) +[0-9.]+ +[0-9.]+ +[0-9.]+ +0\.019 +0\.01233 +- )")))
+      << r.output;
+  // The parameter-change table has the dual column too: RMSE and final estimate of each parameter.
+  EXPECT_TRUE(std::regex_search(r.output, std::regex(R"(parameter change[\s\S]*\n +JUKF +MJUKF +dual *\n)"))) << r.output;
+  EXPECT_TRUE(std::regex_search(r.output, std::regex(R"(final K_tau \(truth 0\.1\) +[-0-9.]+ +[-0-9.]+ +[-0-9.]+)")))
+      << r.output;
   for (const char* file : {"flexible_joint_change_jukf.csv", "flexible_joint_change_mjukf.csv",
-                           "flexible_joint_change_data.csv", "flexible_joint_mjukf.csv"})
+                           "flexible_joint_change_dual.csv", "flexible_joint_change_data.csv",
+                           "flexible_joint_mjukf.csv", "flexible_joint_dual.csv"})
     EXPECT_TRUE(fs::exists(fs::path(dir) / file)) << file;
   // The change data file has no truth columns: the paper's change at 5 s is used.
   const auto truth = readCsv((fs::path(dir) / "flexible_joint_change_data.csv").string());
@@ -446,11 +565,18 @@ TEST(CommandLine, UnknownFlagsAndBadValuesGetTheUsage) {
       {kRobot, ""},
       {kRobot + " fly", "unknown subcommand 'fly'"},
       {est + " --filter mjukf --bogus 1", "unknown flag '--bogus'"},
-      {est + " --filter kf", "--filter must be ukf, jukf or mjukf"},
+      {est + " --filter kf", "--filter must be ukf, jukf, mjukf or dual"},
       {est, "--filter is required"},
       {est + " --filter mjukf --every 0", "--every needs an integer >= 1"},
       {est + " --filter mjukf --xi abc", "--xi needs a finite number"},
       {est + " --filter jukf --xi -1", "--xi applies to mjukf only"},
+      {est + " --filter dual --xi -1", "--xi applies to mjukf only"},
+      {est + " --filter mjukf --ordering prior", "--ordering applies to dual only"},
+      {est + " --filter jukf --ordering updated", "--ordering applies to dual only"},
+      {est + " --filter ukf --r-theta 1e-2", "--r-theta applies to dual only"},
+      {est + " --filter dual --ordering bogus", "--ordering must be prior or updated, not 'bogus'"},
+      {est + " --filter dual --ordering", "--ordering needs a value"},
+      {est + " --filter dual --r-theta -1", "bad filter setting"},
       {est + " --filter mjukf --theta0 0.1", "--theta0 needs 2 comma-separated numbers"},
       {est + " --filter jukf --r -1", "bad filter setting"},
       {est + " --filter mjukf --every", "--every needs a value"},
@@ -468,6 +594,8 @@ TEST(CommandLine, UnknownFlagsAndBadValuesGetTheUsage) {
   const Result help = run(kTank + " --help");
   EXPECT_EQ(help.exitCode, 0);
   EXPECT_NE(help.output.find("simulate"), std::string::npos);
+  for (const char* text : {"--filter ukf|jukf|mjukf|dual", "--ordering prior|updated", "--r-theta DIAG"})
+    EXPECT_NE(help.output.find(text), std::string::npos) << text << "\n" << help.output;
 }
 
 // --every is an int in the filter setup: a larger value must be refused, not wrapped (2^32 + 2 ran
