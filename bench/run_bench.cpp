@@ -1,14 +1,18 @@
 // run/<plant>/<filter>: a whole paper run over the reference measurement file (tank 200 s, robot 20 s,
 // h = 1 ms) with the paper's schedule (algorithms.md §7), accumulating the RMSE of the parameters as
 // the conformance test does. The file is read once, outside the timed loop. Counters: rmse_theta1
-// (and rmse_theta2 on the robot), to show the timed runs are the conformance runs.
+// (and rmse_theta2 on the robot), to show the timed runs are the conformance runs. <filter> is ukf,
+// jukf, mjukf (the paper's settings) or dual: the dual UKF with the library's settings
+// (Experiment::dualUkf(), PriorParameters ordering), the run of `estimate --filter dual`.
 
 #include <string>
+#include <type_traits>
 
 #include <benchmark/benchmark.h>
 
 #include "bench_support.hpp"
 #include "common/csv.hpp"
+#include "mjukf/dual_ukf.hpp"
 #include "mjukf/paper/rmse.hpp"
 #include "mjukf/paper/schedule.hpp"
 
@@ -35,15 +39,16 @@ const std::vector<typename Experiment::Model::Meas>& referenceMeasurements() {
   return y;
 }
 
-template <FilterKind Kind, class Experiment>
-void wholeRun(benchmark::State& state) {
+// `make()` gives a filter as the run starts it.
+template <class Experiment, class Make>
+void wholeRun(benchmark::State& state, Make make) {
   using Model = typename Experiment::Model;
-  using Filter = FilterType<Kind, Model>;
+  using Filter = std::invoke_result_t<Make>;
   const auto& y = referenceMeasurements<Experiment>();
   const auto truth = Model::trueParameters();
   Eigen::Matrix<double, Model::ParamDim, 1> rmse = decltype(rmse)::Zero();
   for (auto _ : state) {
-    auto filter = makeFilter<Kind, Experiment>();
+    auto filter = make();
     paper::RmseAccumulator<double, Model::ParamDim> accumulator;
     const auto outcome = paper::runSchedule(
         filter, static_cast<long>(y.size()), Experiment::stepSize, Experiment::measurementEvery,
@@ -62,19 +67,35 @@ void wholeRun(benchmark::State& state) {
   for (int i = 0; i < Model::ParamDim; ++i) state.counters["rmse_theta" + std::to_string(i + 1)] = rmse(i);
 }
 
+template <class Experiment, class Make>
+void registerRun(const char* filter, Make make) {
+  const std::string name = std::string("run/") + plantName<Experiment>() + "/" + filter;
+  benchmark::RegisterBenchmark(name.c_str(), wholeRun<Experiment, Make>, make)->Unit(benchmark::kMillisecond);
+}
+
 template <FilterKind Kind, class Experiment>
 void registerRun() {
-  const std::string name = std::string("run/") + plantName<Experiment>() + "/" + filterName(Kind);
-  benchmark::RegisterBenchmark(name.c_str(), wholeRun<Kind, Experiment>)->Unit(benchmark::kMillisecond);
+  registerRun<Experiment>(filterName(Kind), [] { return makeFilter<Kind, Experiment>(); });
+}
+
+// The dual UKF from the paper's first guess, with the library's settings.
+template <class Experiment>
+void registerDualRun() {
+  registerRun<Experiment>("dual", [] {
+    using Model = typename Experiment::Model;
+    return DualUkf<Model>(Model(), Experiment::initialState(), Experiment::initialParameters(), Experiment::dualUkf());
+  });
 }
 
 const bool registered = [] {
   registerRun<FilterKind::Ukf, Tank>();
   registerRun<FilterKind::Jukf, Tank>();
   registerRun<FilterKind::Mjukf, Tank>();
+  registerDualRun<Tank>();
   registerRun<FilterKind::Ukf, Robot>();
   registerRun<FilterKind::Jukf, Robot>();
   registerRun<FilterKind::Mjukf, Robot>();
+  registerDualRun<Robot>();
   return true;
 }();
 
