@@ -1,4 +1,5 @@
-// No per-step call allocates: every filter on both plants, every kind of call, including refused ones.
+// No per-step call allocates: every filter on both plants, every kind of call, including refused ones;
+// the dual filter in both orderings; every filter over a discrete-time model; and reset().
 // Two independent witnesses: Eigen's own runtime check (EIGEN_RUNTIME_NO_MALLOC makes any Eigen heap
 // allocation assert while it is forbidden) and a global operator new that counts every allocation.
 
@@ -13,6 +14,9 @@
 
 #include <gtest/gtest.h>
 
+#include "mjukf/dual_ukf.hpp"
+#include "mjukf/model.hpp"
+#include "mjukf/models/flexible_joint.hpp"
 #include "mjukf/paper/experiments.hpp"
 #include "mjukf/paper/schedule.hpp"
 #include "test_support.hpp"
@@ -58,13 +62,89 @@ class NoAllocation : public ::testing::Test {};
 template <template <class, class> class F, class E>
 struct Case : mjukf::testing::PaperFilter<F, E> {};
 
+// The dual filter with the experiment's dualUkf() settings, in the given ordering.
+template <class E, mjukf::DualUkfOrdering Ordering>
+struct DualCase {
+  using Model = typename E::Model;
+  static mjukf::DualUkf<Model> make() {
+    auto s = E::dualUkf();
+    s.ordering = Ordering;
+    return mjukf::DualUkf<Model>(Model(), E::initialState(), E::initialParameters(), s);
+  }
+};
+
+// The robot as a discrete-time model, explicit Euler in `transition`: every filter over it takes no
+// integrator (NoIntegrator), and its time update applies `transition` instead of integrating.
+template <class Scalar_>
+struct DiscreteRobot {
+  using Continuous = mjukf::models::FlexibleJoint<Scalar_>;
+  using Scalar = Scalar_;
+  static constexpr int StateDim = 4, ParamDim = 2, MeasDim = 4, InputDim = 1;
+  using State = typename Continuous::State;
+  using Param = typename Continuous::Param;
+  using Meas = typename Continuous::Meas;
+  using Input = typename Continuous::Input;
+  Continuous robot;
+  Input input(Scalar t) const { return robot.input(t); }
+  State transition(Scalar t, Scalar dt, const State& x, const Input& u, const Param& theta) const {
+    return x + dt * robot.derivative(t, x, u, theta);
+  }
+  Meas measurement(const State& x, const Param& theta) const { return robot.measurement(x, theta); }
+};
+static_assert(mjukf::isDiscreteTime<DiscreteRobot<double>>);
+
+// Each filter over DiscreteRobot with the robot's settings for it (the settings' shared part is the same
+// type for both models: only the model parameter of the settings template differs).
+template <template <class, class> class F, class Scalar,
+          mjukf::DualUkfOrdering Ordering = mjukf::DualUkfOrdering::PriorParameters>
+struct DiscreteCase {
+  using E = mjukf::paper::FlexibleJointExperiment<Scalar>;
+  using Model = DiscreteRobot<Scalar>;
+  using Filter = F<Model, mjukf::NoIntegrator<Scalar>>;
+  static Filter make() {
+    typename Filter::Settings s;
+    if constexpr (std::is_same_v<Filter, mjukf::Ukf<Model, mjukf::NoIntegrator<Scalar>>>) {
+      static_cast<mjukf::UnscentedSettings<Scalar, 4, 4>&>(s) = E::ukf();
+      return Filter(Model(), E::initialState(), E::Model::trueParameters(), s);
+    } else if constexpr (std::is_same_v<Filter, mjukf::JointUkf<Model, mjukf::NoIntegrator<Scalar>>>) {
+      static_cast<mjukf::ParameterEstimationSettings<Scalar, 6, 4, 2>&>(s) = E::jointUkf();
+      return Filter(Model(), E::initialState(), E::initialParameters(), s);
+    } else if constexpr (std::is_same_v<Filter, mjukf::ModifiedJointUkf<Model, mjukf::NoIntegrator<Scalar>>>) {
+      const auto m = E::modifiedJointUkf();
+      static_cast<mjukf::ParameterEstimationSettings<Scalar, 4, 4, 2>&>(s) = m;
+      s.scaling = m.scaling;
+      s.transformation = m.transformation;
+      s.parameterSpread = m.parameterSpread;
+      return Filter(Model(), E::initialState(), E::initialParameters(), s);
+    } else {
+      const auto d = E::dualUkf();
+      static_cast<mjukf::ParameterEstimationSettings<Scalar, 4, 4, 2>&>(s) = d;
+      s.parameterSigmaPoints = d.parameterSigmaPoints;
+      s.initialParameterCovariance = d.initialParameterCovariance;
+      s.parameterProcessNoise = d.parameterProcessNoise;
+      s.parameterObservationNoise = d.parameterObservationNoise;
+      s.parameterForgetting = d.parameterForgetting;
+      s.ordering = Ordering;
+      return Filter(Model(), E::initialState(), E::initialParameters(), s);
+    }
+  }
+};
+
 using Robot = mjukf::paper::FlexibleJointExperiment<double>;
 using Tank = mjukf::paper::CoupledTankExperiment<double>;
 using RobotF = mjukf::paper::FlexibleJointExperiment<float>;
+constexpr auto kPrior = mjukf::DualUkfOrdering::PriorParameters;
+constexpr auto kUpdated = mjukf::DualUkfOrdering::UpdatedParameters;
 using Cases = ::testing::Types<Case<mjukf::Ukf, Robot>, Case<mjukf::JointUkf, Robot>,
                                Case<mjukf::ModifiedJointUkf, Robot>, Case<mjukf::Ukf, Tank>,
                                Case<mjukf::JointUkf, Tank>, Case<mjukf::ModifiedJointUkf, Tank>,
-                               Case<mjukf::ModifiedJointUkf, RobotF>, Case<mjukf::JointUkf, RobotF>>;
+                               Case<mjukf::ModifiedJointUkf, RobotF>, Case<mjukf::JointUkf, RobotF>,
+                               DualCase<Robot, kPrior>, DualCase<Robot, kUpdated>, DualCase<Tank, kPrior>,
+                               DualCase<Tank, kUpdated>, DualCase<RobotF, kPrior>, DualCase<RobotF, kUpdated>,
+                               DiscreteCase<mjukf::Ukf, double>, DiscreteCase<mjukf::JointUkf, double>,
+                               DiscreteCase<mjukf::ModifiedJointUkf, double>, DiscreteCase<mjukf::DualUkf, double>,
+                               DiscreteCase<mjukf::DualUkf, double, kUpdated>,
+                               DiscreteCase<mjukf::ModifiedJointUkf, float>>;
 TYPED_TEST_SUITE(NoAllocation, Cases);
 
 TYPED_TEST(NoAllocation, EveryPerStepCall) {
@@ -151,6 +231,39 @@ TYPED_TEST(NoAllocation, MaskingGatingBoundsAndRepair) {
   for (int i : {0, 1, 2, 3, 4}) EXPECT_EQ(status[i], Status::Ok) << "call " << i;
   EXPECT_EQ(status[5], Status::MeasurementRejected);
   EXPECT_EQ(status[6], Status::Repaired);
+}
+
+template <class T>
+struct IsDual : std::false_type {};
+template <class M, class I>
+struct IsDual<mjukf::DualUkf<M, I>> : std::true_type {};
+
+// reset() with valid arguments, every overload, then the steps after it.
+TYPED_TEST(NoAllocation, Reset) {
+  auto filter = TypeParam::make();
+  using Filter = decltype(filter);
+  using Scalar = typename Filter::Scalar;
+  using Covariance = std::decay_t<decltype(filter.covariance())>;
+  const typename Filter::State x = filter.state() + Filter::State::Constant(Scalar(0.01));
+  const Covariance P = Scalar(2) * filter.covariance();
+  const typename Filter::Param theta = filter.parameters();
+  const typename Filter::Meas y = Filter::Meas::Constant(Scalar(0.01));
+  const Scalar h = Scalar(1e-3);
+  ASSERT_EQ(filter.timeUpdate(Scalar(0), h), Status::Ok);
+  Status status[6];
+  const long count = allocationsDuring([&] {
+    filter.reset(x, P);
+    status[0] = filter.timeUpdate(h, h);
+    filter.reset(x, P, theta);
+    status[1] = filter.measurementUpdate(y);
+    status[2] = filter.timeUpdate(2 * h, h);
+    if constexpr (IsDual<Filter>::value) filter.reset(x, P, theta, filter.parameterCovariance());
+    status[3] = filter.measurementUpdate(y);
+    status[4] = filter.timeUpdate(3 * h, h);
+    status[5] = filter.measurementUpdate(y);
+  });
+  EXPECT_EQ(count, 0) << "heap allocations in reset or the steps after it";
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(status[i], Status::Ok) << "call " << i;
 }
 
 // The witnesses work: an allocation inside the window is seen by both.

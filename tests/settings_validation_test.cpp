@@ -43,6 +43,15 @@ void expectModifiedRejected(Mutate&& mutate, const std::string& setting) {
       setting);
 }
 
+template <class Mutate>
+void expectDualRejected(Mutate&& mutate, const std::string& setting,
+                        const Robot::Param& initialParameters = Robot::initialParameters()) {
+  auto s = Robot::dualUkf();
+  mutate(s);
+  expectRejected([&] { mjukf::DualUkf<Robot::Model>(Robot::Model(), Robot::initialState(), initialParameters, s); },
+                 setting);
+}
+
 using JointSettings = mjukf::JointUkfSettings<Robot::Model>;
 
 TEST(SettingsValidation, PaperSettingsAreAccepted) {
@@ -52,6 +61,14 @@ TEST(SettingsValidation, PaperSettingsAreAccepted) {
                                                 Robot::jointUkf()));
   EXPECT_NO_THROW(mjukf::ModifiedJointUkf<Robot::Model>(Robot::Model(), Robot::initialState(),
                                                         Robot::initialParameters(), Robot::modifiedJointUkf()));
+  EXPECT_NO_THROW(mjukf::DualUkf<Robot::Model>(Robot::Model(), Robot::initialState(), Robot::initialParameters(),
+                                               Robot::dualUkf()));
+  using Tank = mjukf::paper::CoupledTankExperiment<double>;
+  EXPECT_NO_THROW(
+      mjukf::DualUkf<Tank::Model>(Tank::Model(), Tank::initialState(), Tank::initialParameters(), Tank::dualUkf()));
+  using TankF = mjukf::paper::CoupledTankExperiment<float>;
+  EXPECT_NO_THROW(
+      mjukf::DualUkf<TankF::Model>(TankF::Model(), TankF::initialState(), TankF::initialParameters(), TankF::dualUkf()));
 }
 
 TEST(SettingsValidation, InitialCovarianceMustBeSymmetricPositiveDefinite) {
@@ -146,6 +163,82 @@ TEST(SettingsValidation, IntegratorGamma) {
   expectRejected([] { (void)mjukf::ITrBdf2<double>{1.0}; }, "gamma");
   expectRejected([] { (void)mjukf::ITrBdf2<double>{kNan}; }, "gamma");
   EXPECT_NO_THROW(mjukf::ITrBdf2<double>(2.0 - std::sqrt(2.0)));
+}
+
+// The dual filter's own settings, each named in the message; the shared ones (those of its state
+// filter) as for the other filters.
+TEST(SettingsValidation, DualUkfParameterFilterSettings) {
+  // P^θ₀: symmetric positive definite. The default (zero) is not.
+  expectDualRejected([](auto& s) { s.initialParameterCovariance.setZero(); }, "initialParameterCovariance");
+  expectDualRejected([](auto& s) { s.initialParameterCovariance(1, 1) = -1e-3; }, "initialParameterCovariance");
+  expectDualRejected([](auto& s) { s.initialParameterCovariance(0, 1) = 1e-4; }, "initialParameterCovariance");
+  expectDualRejected([](auto& s) { s.initialParameterCovariance(0, 0) = kNan; }, "initialParameterCovariance");
+  expectDualRejected([](auto& s) { s.initialParameterCovariance(0, 1) = s.initialParameterCovariance(1, 0) = 2e-3; },
+                     "initialParameterCovariance");  // correlation 2: indefinite
+  // Q_θ and the observation noise: symmetric positive semi-definite.
+  expectDualRejected([](auto& s) { s.parameterProcessNoise(0, 0) = -1e-5; }, "parameterProcessNoise");
+  expectDualRejected([](auto& s) { s.parameterProcessNoise(1, 0) = 1e-6; }, "parameterProcessNoise");
+  expectDualRejected([](auto& s) { s.parameterProcessNoise(1, 1) = kNan; }, "parameterProcessNoise");
+  expectDualRejected([](auto& s) { s.parameterProcessNoise(0, 1) = s.parameterProcessNoise(1, 0) = 1e-4; },
+                     "parameterProcessNoise");  // symmetric, eigenvalues 1e-5 ± 1e-4
+  expectDualRejected([](auto& s) { s.parameterObservationNoise(2, 2) = -0.05; }, "parameterObservationNoise");
+  expectDualRejected([](auto& s) { s.parameterObservationNoise(0, 3) = 0.01; }, "parameterObservationNoise");
+  expectDualRejected([](auto& s) { s.parameterObservationNoise(1, 1) = std::numeric_limits<double>::infinity(); },
+                     "parameterObservationNoise");
+  // λ ∈ (0, 1].
+  for (const double lambda : {0.0, -0.5, 1.0 + 1e-12, 2.0, kNan, std::numeric_limits<double>::infinity()})
+    expectDualRejected([lambda](auto& s) { s.parameterForgetting = lambda; }, "parameterForgetting");
+  // The first guess within the bounds, and the bounds themselves.
+  expectDualRejected([](auto& s) { s.parameterBounds.lower << 0.12, 0.0; }, "initialParameters");
+  expectDualRejected([](auto& s) { s.parameterBounds.upper << 1.0, 0.14; }, "initialParameters");
+  expectDualRejected([](auto& s) { s.parameterBounds.lower << 0.2, 0.0; s.parameterBounds.upper << 0.1, 1.0; },
+                     "parameterBounds");
+  expectDualRejected([](auto& s) { s.parameterBounds.upper(1) = kNan; }, "parameterBounds");
+  // The initial values.
+  expectDualRejected([](auto&) {}, "initialParameters", Robot::Param(0.1, kNan));
+  Robot::State x0 = Robot::initialState();
+  x0(1) = kNan;
+  auto valid = Robot::dualUkf();
+  expectRejected([&] { mjukf::DualUkf<Robot::Model>(Robot::Model(), x0, Robot::initialParameters(), valid); },
+                 "initialState");
+  // The parameter filter's sigma points.
+  expectDualRejected([](auto& s) { s.parameterSigmaPoints.alpha = 0.0; }, "alpha");
+  expectDualRejected([](auto& s) { s.parameterSigmaPoints.kappa = -2.0; }, "kappa");  // L + λ = 0 for L = p = 2
+}
+
+TEST(SettingsValidation, DualUkfSharedSettings) {
+  expectDualRejected([](auto& s) { s.initialCovariance.setZero(); }, "initialCovariance");
+  expectDualRejected([](auto& s) { s.initialCovariance(0, 1) = 0.1; }, "initialCovariance");
+  expectDualRejected([](auto& s) { s.initialCovariance(3, 3) = -0.5; }, "initialCovariance");
+  expectDualRejected([](auto& s) { s.processNoise(2, 2) = -1e-5; }, "processNoise");
+  expectDualRejected([](auto& s) { s.processNoise(0, 3) = 1e-6; }, "processNoise");
+  expectDualRejected([](auto& s) { s.measurementNoise.setZero(); }, "measurementNoise");
+  expectDualRejected([](auto& s) { s.measurementNoise(1, 2) = 1e-4; }, "measurementNoise");
+  expectDualRejected([](auto& s) { s.sigmaPoints.kappa = -4.0; }, "kappa");  // L + λ = 0 for L = n = 4
+  expectDualRejected([](auto& s) { s.repair.maxAttempts = -1; }, "repair.maxAttempts");
+  expectDualRejected([](auto& s) { s.gate.nisThreshold(0) = 0.0; }, "gate.nisThreshold");
+}
+
+// The limits of the dual filter's settings are legal: Q_θ = 0, no observation noise beyond R (the
+// defaults), λ = 1 and a small λ, bounds touching the first guess.
+TEST(SettingsValidation, DualUkfLimitsAreAccepted) {
+  const auto make = [](const mjukf::DualUkfSettings<Robot::Model>& s) {
+    return mjukf::DualUkf<Robot::Model>(Robot::Model(), Robot::initialState(), Robot::initialParameters(), s);
+  };
+  auto s = Robot::dualUkf();
+  s.parameterProcessNoise.setZero();
+  s.parameterObservationNoise.setZero();
+  EXPECT_NO_THROW(make(s));
+  s.parameterForgetting = 1.0;
+  EXPECT_NO_THROW(make(s));
+  s.parameterForgetting = 1e-3;
+  EXPECT_NO_THROW(make(s));
+  s.parameterBounds.lower = Robot::initialParameters();
+  s.parameterBounds.upper = Robot::initialParameters();
+  EXPECT_NO_THROW(make(s));
+  s = Robot::dualUkf();
+  s.parameterProcessNoise << 1e-5, 1e-5, 1e-5, 1e-5;  // singular, positive semi-definite
+  EXPECT_NO_THROW(make(s));
 }
 
 }  // namespace
