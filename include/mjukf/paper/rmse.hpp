@@ -1,7 +1,7 @@
 #pragma once
 
 /// \file
-/// The accuracy metric of the paper's experiments (algorithms.md §8).
+/// The accuracy metric of the paper's experiments: the RMSE of the parameter estimates (eq. 16).
 
 #include <Eigen/Core>
 
