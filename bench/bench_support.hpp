@@ -14,6 +14,7 @@
 #include "mjukf/joint_ukf.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
 #include "mjukf/paper/experiments.hpp"
+#include "mjukf/simulation.hpp"
 #include "mjukf/ukf.hpp"
 
 namespace mjukf::bench {
@@ -117,21 +118,18 @@ std::vector<typename Experiment::Model::Meas> simulatedMeasurements(long rows) {
   using Model = typename Experiment::Model;
   using State = typename Model::State;
   const Model model;
-  const ITrBdf2<double> integrator;
   const auto theta = Model::trueParameters();
   const double noiseSd = std::sqrt(Experiment::ukf().measurementNoise(0, 0));
   std::mt19937_64 rng(2024);
   std::normal_distribution<double> normal(0.0, noiseSd);
   std::vector<typename Model::Meas> y(static_cast<std::size_t>(rows));
-  State x = Experiment::initialState();
-  const double h = Experiment::stepSize;
-  for (long k = 0; k < rows; ++k) {
-    auto& row = y[static_cast<std::size_t>(k)];
-    row = model.measurement(x, theta);
-    for (int c = 0; c < row.size(); ++c) row(c) += normal(rng);
-    const auto f = [&](double t, const State& s) { return model.derivative(t, s, model.input(t), theta); };
-    x = integrator.step(f, double(k) * h, x, h);
-  }
+  if (rows < 1) return y;
+  simulate(model, ITrBdf2<double>(), Experiment::initialState(), theta, 0.0, Experiment::stepSize, rows - 1,
+           [&](long k, double, const State& x) {
+             auto& row = y[static_cast<std::size_t>(k)];
+             row = model.measurement(x, theta);
+             for (int c = 0; c < row.size(); ++c) row(c) += normal(rng);
+           });
   return y;
 }
 

@@ -57,17 +57,10 @@ namespace {
 TEST(Instantiation, FloatFilterRunsAndAgreesWithDouble) {
   using RobotD = mjukf::paper::FlexibleJointExperiment<double>;
   using RobotF = mjukf::paper::FlexibleJointExperiment<float>;
-  const RobotD::Model model;
-  const mjukf::ITrBdf2<double> stepper;
   const long rows = 20001;
   std::vector<RobotD::Model::Meas> truth(rows);
-  truth[0].setZero();
-  for (long k = 0; k + 1 < rows; ++k) {
-    auto f = [&](double t, const RobotD::State& x) -> RobotD::State {
-      return model.derivative(t, x, model.input(t), RobotD::Model::trueParameters());
-    };
-    truth[k + 1] = stepper.step(f, k * 1e-3, truth[k], 1e-3);
-  }
+  mjukf::simulate(RobotD::Model(), mjukf::ITrBdf2<double>(), RobotD::State::Zero(), RobotD::Model::trueParameters(),
+                  0.0, 1e-3, rows - 1, [&](long k, double, const RobotD::State& x) { truth[k] = x; });
   mjukf::ModifiedJointUkf<RobotF::Model> single(RobotF::Model(), RobotF::initialState(), RobotF::initialParameters(),
                                                 RobotF::modifiedJointUkf());
   mjukf::ModifiedJointUkf<RobotD::Model> twice(RobotD::Model(), RobotD::initialState(), RobotD::initialParameters(),

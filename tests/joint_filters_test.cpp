@@ -9,6 +9,7 @@
 #include "mjukf/models/flexible_joint.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
 #include "mjukf/paper/experiments.hpp"
+#include "mjukf/simulation.hpp"
 #include "mjukf/ukf.hpp"
 #include "test_support.hpp"
 
@@ -167,10 +168,7 @@ TEST(JointFilters, ModifiedJointUkfStepMatchesEquations9And10) {
   const mjukf::ITrBdf2<double> stepper;
   for (int i = 0; i < 9; ++i) {
     const Model::Param theta = thetaPoints.col(i);
-    auto f = [&](double s, const Model::State& x) -> Model::State {
-      return model.derivative(s, x, model.input(s), theta);
-    };
-    points.col(i) = stepper.step(f, t, Model::State(points.col(i)), h);
+    points.col(i) = mjukf::stepModel(model, stepper, t, h, Model::State(points.col(i)), theta);
   }
   const auto& wm = sigma.meanWeights();
   const auto& wc = sigma.covarianceWeights();

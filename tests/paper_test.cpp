@@ -1,5 +1,5 @@
 // The paper layer: the schedule (algorithms.md §7), which call happens at which row and where a
-// refused step stops the run, and the RMSE (§8).
+// refused step stops the run; and the RMSE.
 
 #include <cmath>
 #include <string>

@@ -14,6 +14,7 @@
 #include "mjukf/integrators/i_tr_bdf2.hpp"
 #include "mjukf/joint_ukf.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
+#include "mjukf/simulation.hpp"
 #include "mjukf/ukf.hpp"
 
 namespace mjukf::testing {
@@ -67,8 +68,7 @@ class TankMeasurements {
   /// The measurement of row k + 1 after the one of row k (row 0 is the initial state).
   const Meas& next() {
     const auto theta = Model::trueParameters();
-    const auto rhs = [&](double t, const State& x) -> State { return model_.derivative(t, x, model_.input(t), theta); };
-    if (row_ > 0) truth_ = integrator_.step(rhs, double(row_ - 1) * h_, truth_, h_);
+    if (row_ > 0) truth_ = stepModel(model_, integrator_, double(row_ - 1) * h_, h_, truth_, theta);
     ++row_;
     y_ = model_.measurement(truth_, theta);
     for (int c = 0; c < Model::MeasDim; ++c) y_(c) += sigma_ * noise_(random_);

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "mjukf/integrators/i_tr_bdf2.hpp"
+#include "mjukf/simulation.hpp"
 #include "mjukf/ukf.hpp"
 #include "test_support.hpp"
 
@@ -47,14 +48,10 @@ template <class Model>
 void discretise(const Model& model, double t, double h, int steps, Eigen::Matrix3d& F, Eigen::Vector3d& c) {
   const mjukf::ITrBdf2<double> stepper;
   const typename Model::Param none;
-  auto advance = [&](Eigen::Vector3d x, bool withInput) {
-    for (int k = 0; k < steps; ++k) {
-      auto f = [&](double s, const Eigen::Vector3d& z) -> Eigen::Vector3d {
-        return model.derivative(s, z, withInput ? model.input(s) : Model::Input::Zero().eval(), none);
-      };
-      x = stepper.step(f, t + k * h, x, h);
-    }
-    return x;
+  const auto ignore = [](long, double, const Eigen::Vector3d&) {};
+  auto advance = [&](const Eigen::Vector3d& x, bool withInput) {
+    return withInput ? mjukf::simulate(model, stepper, x, none, t, h, steps, ignore)
+                     : mjukf::simulate(model, stepper, x, Model::Input::Zero(), none, t, h, steps, ignore);
   };
   for (int i = 0; i < 3; ++i) F.col(i) = advance(Eigen::Vector3d::Unit(i), false);
   c = advance(Eigen::Vector3d::Zero(), true);

@@ -14,6 +14,7 @@
 #include "common/cli.hpp"
 #include "common/plant_data.hpp"
 #include "mjukf/integrators/i_tr_bdf2.hpp"
+#include "mjukf/simulation.hpp"
 
 namespace mjukf::examples {
 
@@ -59,27 +60,23 @@ double noiseStandardDeviation(const std::vector<State>& states, double snrDb) {
 template <class Model>
 PlantData<Model> simulatePlant(const Model& model, const SimulationOptions<Model>& options) {
   using State = typename Model::State;
+  using Param = typename Model::Param;
   const double h = options.stepSize;
   if (!(options.duration >= 0 && options.duration / h + 1 <= double(kMaxSimulationRows)))
     throw std::invalid_argument("simulatePlant: duration " + std::to_string(options.duration) + " s out of range");
   const long rows = std::lround(options.duration / h) + 1;
-  const ITrBdf2<double> integrator;
 
   PlantData<Model> data;
   data.stepSize = h;
   data.parameterTruthFromFile = true;
   data.stateTruth.resize(static_cast<std::size_t>(rows));
   data.parameterTruth.resize(static_cast<std::size_t>(rows));
-  data.stateTruth[0] = options.initialState;
-  for (long k = 0; k < rows; ++k) {
-    const auto row = static_cast<std::size_t>(k);
-    data.parameterTruth[row] = options.parameters.atRow(k, h);
-    if (k + 1 == rows) break;
-    // The step from t_k runs with the parameters in force at t_k; the input is evaluated at each stage.
-    const auto& theta = data.parameterTruth[row];
-    const auto rhs = [&](double t, const State& x) -> State { return model.derivative(t, x, model.input(t), theta); };
-    data.stateTruth[row + 1] = integrator.step(rhs, double(k) * h, data.stateTruth[row], h);
-  }
+  for (long k = 0; k < rows; ++k) data.parameterTruth[static_cast<std::size_t>(k)] = options.parameters.atRow(k, h);
+  // The step from t_k runs with the parameters in force at t_k; the input is evaluated at each stage.
+  mjukf::simulate(
+      model, ITrBdf2<double>(), options.initialState,
+      [&](long k) -> const Param& { return data.parameterTruth[static_cast<std::size_t>(k)]; }, 0.0, h, rows - 1,
+      [&](long k, double, const State& x) { data.stateTruth[static_cast<std::size_t>(k)] = x; });
 
   const double sigma = std::isinf(options.snrDb) ? 0.0 : noiseStandardDeviation(data.stateTruth, options.snrDb);
   std::mt19937_64 random(options.seed);

@@ -14,6 +14,7 @@
 #include "mjukf/models/flexible_joint.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
 #include "mjukf/sigma_points.hpp"
+#include "mjukf/simulation.hpp"
 #include "mjukf/status.hpp"
 #include "mjukf/ukf.hpp"
 #include "mjukf/unscented_transform.hpp"

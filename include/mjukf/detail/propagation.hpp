@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "mjukf/model.hpp"
+#include "mjukf/simulation.hpp"
 #include "mjukf/status.hpp"
 
 namespace mjukf::detail {
@@ -73,28 +74,15 @@ Status checkStep(Scalar t, Scalar h, int steps) {
   return Status::Ok;
 }
 
-// x(t + steps h) from x(t) by `steps` steps of size h under parameters theta: integrator steps of a
-// continuous model, or the transition of a discrete-time one (model.hpp), with the input at the start
-// of each step.
+// x(t + steps h) from x(t) by `steps` steps of size h under parameters theta, each one stepModel
+// (simulation.hpp): an integrator step of a continuous model, or the transition of a discrete-time one.
 template <class Model, class Integrator, class InputSource, class StateExpr>
 typename Model::State propagate(const Model& model, const Integrator& integrator, const InputSource& input,
                                 const typename Model::Param& theta, typename Model::Scalar t,
                                 typename Model::Scalar h, int steps, const StateExpr& x0) {
   using Scalar = typename Model::Scalar;
-  using State = typename Model::State;
-  State x = x0;
-  if constexpr (isDiscreteTime<Model>) {
-    static_cast<void>(integrator);
-    for (int k = 0; k < steps; ++k) {
-      const Scalar time = t + Scalar(k) * h;
-      x = model.transition(time, h, x, input(time), theta);
-    }
-  } else {
-    const auto rhs = [&](Scalar time, const State& state) -> State {
-      return model.derivative(time, state, input(time), theta);
-    };
-    for (int k = 0; k < steps; ++k) x = integrator.step(rhs, t + Scalar(k) * h, x, h);
-  }
+  typename Model::State x = x0;
+  for (int k = 0; k < steps; ++k) x = stepModel(model, integrator, t + Scalar(k) * h, h, x, input, theta);
   return x;
 }
 

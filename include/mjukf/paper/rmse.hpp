@@ -1,7 +1,8 @@
 #pragma once
 
 /// \file
-/// The accuracy metric of the paper's experiments (docs/algorithms.md §8).
+/// The accuracy metric of the paper's experiments: the RMSE of the parameter estimates (eq. 16;
+/// docs/algorithms.md §8).
 
 #include <Eigen/Core>
 
