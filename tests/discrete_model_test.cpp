@@ -22,42 +22,18 @@
 #include "mjukf/paper/schedule.hpp"
 #include "mjukf/ukf.hpp"
 #include "robustness_support.hpp"
+#include "test_support.hpp"
 
 namespace {
 
 using mjukf::DualUkfOrdering;
 using mjukf::Status;
 using mjukf::testing::bitwiseSame;
-
-// Explicit Euler: x + h f(t, x), one evaluation per step.
-template <class Scalar_>
-struct Euler {
-  using Scalar = Scalar_;
-  [[maybe_unused]] static constexpr int order = 1, evaluationsPerStep = 1;  // the stepper convention
-  template <class F, class State>
-  State step(F&& f, Scalar t, const State& x, Scalar h) const {
-    return x + h * f(t, x);
-  }
-};
-
-// The flexible-joint robot discretised by explicit Euler: x_k = x_{k−1} + dt f(t, x_{k−1}, u(t), θ),
-// with FlexibleJoint's measurement and input signal.
-template <class Scalar_ = double>
-struct DiscreteRobot {
-  using Continuous = mjukf::models::FlexibleJoint<Scalar_>;
-  using Scalar = Scalar_;
-  static constexpr int StateDim = 4, ParamDim = 2, MeasDim = 4, InputDim = 1;
-  using State = typename Continuous::State;
-  using Param = typename Continuous::Param;
-  using Meas = typename Continuous::Meas;
-  using Input = typename Continuous::Input;
-  Continuous robot;
-  Input input(Scalar t) const { return robot.input(t); }
-  State transition(Scalar t, Scalar dt, const State& x, const Input& u, const Param& theta) const {
-    return x + dt * robot.derivative(t, x, u, theta);
-  }
-  Meas measurement(const State& x, const Param& theta) const { return robot.measurement(x, theta); }
-};
+using mjukf::testing::DiscreteRobot;
+using mjukf::testing::Euler;
+using mjukf::testing::IsDual;
+using mjukf::testing::IsModifiedJoint;
+using mjukf::testing::sameFilter;
 
 // ---------------------------------------------------------------------------------------------------
 // Compile time: what is discrete, and which integrator a filter takes when none is named.
@@ -85,15 +61,6 @@ static_assert(std::is_same_v<mjukf::DualUkf<Continuous>::Integrator, mjukf::ITrB
 using Robot = mjukf::paper::FlexibleJointExperiment<double>;
 using ContinuousIntegrator = Euler<double>;
 using DiscreteIntegrator = mjukf::NoIntegrator<double>;
-
-template <class T>
-struct IsDual : std::false_type {};
-template <class M, class I>
-struct IsDual<mjukf::DualUkf<M, I>> : std::true_type {};
-template <class T>
-struct IsModified : std::false_type {};
-template <class M, class I>
-struct IsModified<mjukf::ModifiedJointUkf<M, I>> : std::true_type {};
 
 // The robot's preset for filter template F, as the settings of F over `Model` (the shared part of the
 // settings is the same type for both models; the rest is copied field by field).
@@ -142,32 +109,6 @@ struct Pair {
   }
 };
 
-// Everything a caller can observe of the two filters is the same, bit for bit.
-template <class A, class B>
-::testing::AssertionResult same(const A& a, const B& b) {
-  const auto differ = [](const char* what) { return ::testing::AssertionFailure() << what << " differs"; };
-  if (!bitwiseSame(a.state(), b.state())) return differ("state");
-  if (!bitwiseSame(a.covariance(), b.covariance())) return differ("covariance");
-  if (!bitwiseSame(a.parameters(), b.parameters())) return differ("parameters");
-  if (!bitwiseSame(a.lastUpdate().innovation, b.lastUpdate().innovation)) return differ("innovation");
-  if (!bitwiseSame(a.lastUpdate().innovationCovariance, b.lastUpdate().innovationCovariance))
-    return differ("innovation covariance");
-  if (!bitwiseSame(Eigen::Matrix<double, 1, 1>(a.lastUpdate().nis), Eigen::Matrix<double, 1, 1>(b.lastUpdate().nis)))
-    return differ("NIS");
-  if (a.hasPropagatedPoints() != b.hasPropagatedPoints()) return differ("hasPropagatedPoints");
-  if constexpr (IsModified<A>::value) {
-    if (!bitwiseSame(a.parameterPoints(), b.parameterPoints())) return differ("parameterPoints");
-  }
-  if constexpr (IsDual<A>::value) {
-    if (!bitwiseSame(a.parameterCovariance(), b.parameterCovariance())) return differ("parameterCovariance");
-    if (!bitwiseSame(a.lastParameterUpdate().innovation, b.lastParameterUpdate().innovation))
-      return differ("parameter innovation");
-    if (!bitwiseSame(a.lastParameterUpdate().innovationCovariance, b.lastParameterUpdate().innovationCovariance))
-      return differ("parameter innovation covariance");
-  }
-  return ::testing::AssertionSuccess();
-}
-
 std::vector<Robot::Model::Meas> referenceMeasurements() {
   const auto table = mjukf::examples::readCsv(std::string(MJUKF_DATA_DIR) + "/flexible_joint_reference.csv");
   std::vector<Robot::Model::Meas> rows(table.rows());
@@ -188,7 +129,7 @@ void appendRow(std::vector<double>& out, const Filter& f) {
   append(f.covariance());
   append(f.parameters());
   if constexpr (IsDual<Filter>::value) append(f.parameterCovariance());
-  if constexpr (IsModified<Filter>::value) append(f.parameterPoints());
+  if constexpr (IsModifiedJoint<Filter>::value) append(f.parameterPoints());
 }
 
 // The paper's schedule (paper::runSchedule: a time and a measurement update every 5th step, the mean
@@ -213,7 +154,7 @@ void expectPaperScheduleBitForBit(DualUkfOrdering ordering = DualUkfOrdering::Pr
   for (std::size_t i = 0; i < rowsContinuous.size(); ++i)
     ASSERT_TRUE(std::memcmp(&rowsContinuous[i], &rowsDiscrete[i], sizeof(double)) == 0)
         << "row " << i / perRow << ", value " << i % perRow << ": " << rowsContinuous[i] << " vs " << rowsDiscrete[i];
-  EXPECT_TRUE(same(continuous, discrete));
+  EXPECT_TRUE(sameFilter(continuous, discrete));
   // The filter did something: the parameter estimators moved their parameters.
   if constexpr (!std::is_same_v<F<Continuous, int>, mjukf::Ukf<Continuous, int>>) {
     EXPECT_GT((discrete.parameters() - Robot::initialParameters()).cwiseAbs().maxCoeff(), 1e-3);
@@ -282,7 +223,7 @@ void expectEveryCallBitForBit(DualUkfOrdering ordering = DualUkfOrdering::PriorP
     }
     ASSERT_EQ(sc, Status::Ok) << "call " << k;
     ASSERT_EQ(sd, Status::Ok) << "call " << k;
-    ASSERT_TRUE(same(continuous, discrete)) << "after the propagation of call " << k;
+    ASSERT_TRUE(sameFilter(continuous, discrete)) << "after the propagation of call " << k;
     if (k % 6 == 2 || k % 6 == 3) continue;  // open loop: no measurement now, the next one then draws
     Robot::Model::Meas withMissing = measured;
     withMissing(1) = std::nan("");
@@ -291,7 +232,7 @@ void expectEveryCallBitForBit(DualUkfOrdering ordering = DualUkfOrdering::PriorP
                                     : continuous.measurementUpdate(measured)));
     ASSERT_TRUE(
         mjukf::taken(masked ? discrete.measurementUpdate(withMissing, present) : discrete.measurementUpdate(measured)));
-    ASSERT_TRUE(same(continuous, discrete)) << "after the measurement update of call " << k;
+    ASSERT_TRUE(sameFilter(continuous, discrete)) << "after the measurement update of call " << k;
   }
   // An update with no time update before it (after an open-loop step), then another right after it.
   ASSERT_EQ(continuous.propagateMean(double(row) * h, h), Status::Ok);
@@ -299,7 +240,7 @@ void expectEveryCallBitForBit(DualUkfOrdering ordering = DualUkfOrdering::PriorP
   for (int i = 0; i < 2; ++i) {
     ASSERT_TRUE(mjukf::taken(continuous.measurementUpdate(y[static_cast<std::size_t>(row + 1)])));
     ASSERT_TRUE(mjukf::taken(discrete.measurementUpdate(y[static_cast<std::size_t>(row + 1)])));
-    ASSERT_TRUE(same(continuous, discrete));
+    ASSERT_TRUE(sameFilter(continuous, discrete));
   }
 }
 

@@ -23,6 +23,7 @@
 #include "mjukf/sigma_points.hpp"
 #include "mjukf/ukf.hpp"
 #include "robustness_support.hpp"
+#include "test_support.hpp"
 
 namespace mjukf {
 // Every member compiled for float and double, with an integrator other than the default.
@@ -46,14 +47,7 @@ const char* name(DualUkfOrdering ordering) {
 
 // Explicit Euler, one evaluation of f per step: the model's derivative count is then the number of
 // propagations of a point over one step.
-struct Euler {
-  using Scalar = double;
-  [[maybe_unused]] static constexpr int order = 1, evaluationsPerStep = 1;  // the stepper convention
-  template <class F, class State>
-  State step(F&& f, double t, const State& x, double h) const {
-    return x + h * f(t, x);
-  }
-};
+using Euler = mjukf::testing::Euler<double>;
 
 // The shared (state filter) settings of a dual filter, as the settings of a Ukf.
 template <class Model>

@@ -21,6 +21,8 @@
 
 namespace {
 
+using mjukf::testing::IsDual;
+
 using mjukf::Status;
 constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -64,11 +66,6 @@ struct CollapsingStepper {
     return State::Zero();
   }
 };
-
-template <class T>
-struct IsDual : std::false_type {};
-template <class M, class I>
-struct IsDual<mjukf::DualUkf<M, I>> : std::true_type {};
 
 // Everything a caller can observe of a filter.
 template <class Filter>

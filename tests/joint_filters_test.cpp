@@ -66,14 +66,7 @@ TEST(JointFilters, TankPropagationsPerTimeUpdate) {
 
 // Explicit Euler: x + h f(t, x) leaves a component with zero derivative bit for bit unchanged, so an
 // augmented model with θ̇ = 0 integrates exactly like the JUKF's split propagation.
-struct Euler {
-  using Scalar = double;
-  [[maybe_unused]] static constexpr int order = 1, evaluationsPerStep = 1;  // the stepper convention
-  template <class F, class State>
-  State step(F&& f, double t, const State& x, double h) const {
-    return x + h * f(t, x);
-  }
-};
+using Euler = mjukf::testing::Euler<double>;
 
 // The robot with its parameters appended to the state, θ̇ = 0: a UKF on it is a JUKF by definition.
 struct AugmentedRobot {

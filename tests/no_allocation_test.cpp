@@ -19,6 +19,7 @@
 #include "mjukf/models/flexible_joint.hpp"
 #include "mjukf/paper/experiments.hpp"
 #include "mjukf/paper/schedule.hpp"
+#include "robustness_support.hpp"
 #include "test_support.hpp"
 
 namespace {
@@ -73,24 +74,7 @@ struct DualCase {
   }
 };
 
-// The robot as a discrete-time model, explicit Euler in `transition`: every filter over it takes no
-// integrator (NoIntegrator), and its time update applies `transition` instead of integrating.
-template <class Scalar_>
-struct DiscreteRobot {
-  using Continuous = mjukf::models::FlexibleJoint<Scalar_>;
-  using Scalar = Scalar_;
-  static constexpr int StateDim = 4, ParamDim = 2, MeasDim = 4, InputDim = 1;
-  using State = typename Continuous::State;
-  using Param = typename Continuous::Param;
-  using Meas = typename Continuous::Meas;
-  using Input = typename Continuous::Input;
-  Continuous robot;
-  Input input(Scalar t) const { return robot.input(t); }
-  State transition(Scalar t, Scalar dt, const State& x, const Input& u, const Param& theta) const {
-    return x + dt * robot.derivative(t, x, u, theta);
-  }
-  Meas measurement(const State& x, const Param& theta) const { return robot.measurement(x, theta); }
-};
+using mjukf::testing::DiscreteRobot;  // the robot as a discrete-time model: no integrator
 static_assert(mjukf::isDiscreteTime<DiscreteRobot<double>>);
 
 // Each filter over DiscreteRobot with the robot's settings for it (the settings' shared part is the same
@@ -233,10 +217,7 @@ TYPED_TEST(NoAllocation, MaskingGatingBoundsAndRepair) {
   EXPECT_EQ(status[6], Status::Repaired);
 }
 
-template <class T>
-struct IsDual : std::false_type {};
-template <class M, class I>
-struct IsDual<mjukf::DualUkf<M, I>> : std::true_type {};
+using mjukf::testing::IsDual;
 
 // reset() with valid arguments, every overload, then the steps after it.
 TYPED_TEST(NoAllocation, Reset) {

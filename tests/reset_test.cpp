@@ -31,6 +31,9 @@ namespace {
 using mjukf::DualUkfOrdering;
 using mjukf::Status;
 using mjukf::testing::bitwiseSame;
+using mjukf::testing::IsDual;
+using mjukf::testing::IsModifiedJoint;
+using mjukf::testing::sameFilter;
 using Robot = mjukf::paper::FlexibleJointExperiment<double>;
 using Model = Robot::Model;
 using Ukf = mjukf::Ukf<Model>;
@@ -38,44 +41,6 @@ using JointUkf = mjukf::JointUkf<Model>;
 using ModifiedJointUkf = mjukf::ModifiedJointUkf<Model>;
 using DualUkf = mjukf::DualUkf<Model>;
 constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
-
-template <class T>
-struct IsDual : std::false_type {};
-template <class M, class I>
-struct IsDual<mjukf::DualUkf<M, I>> : std::true_type {};
-template <class T>
-struct IsModified : std::false_type {};
-template <class M, class I>
-struct IsModified<mjukf::ModifiedJointUkf<M, I>> : std::true_type {};
-
-// Everything a caller can observe of the two filters is the same, bit for bit, NaN included.
-template <class Filter>
-::testing::AssertionResult same(const Filter& a, const Filter& b) {
-  const auto differ = [](const char* what) { return ::testing::AssertionFailure() << what << " differs"; };
-  if (!bitwiseSame(a.state(), b.state())) return differ("state");
-  if (!bitwiseSame(a.covariance(), b.covariance())) return differ("covariance");
-  if (!bitwiseSame(a.parameters(), b.parameters())) return differ("parameters");
-  if (!bitwiseSame(a.lastUpdate().innovation, b.lastUpdate().innovation)) return differ("innovation");
-  if (!bitwiseSame(a.lastUpdate().innovationCovariance, b.lastUpdate().innovationCovariance))
-    return differ("innovation covariance");
-  if (!bitwiseSame(Eigen::Matrix<double, 1, 1>(a.lastUpdate().nis), Eigen::Matrix<double, 1, 1>(b.lastUpdate().nis)))
-    return differ("NIS");
-  if (a.hasPropagatedPoints() != b.hasPropagatedPoints()) return differ("hasPropagatedPoints");
-  if constexpr (IsModified<Filter>::value) {
-    if (!bitwiseSame(a.parameterPoints(), b.parameterPoints())) return differ("parameterPoints");
-  }
-  if constexpr (IsDual<Filter>::value) {
-    if (!bitwiseSame(a.parameterCovariance(), b.parameterCovariance())) return differ("parameterCovariance");
-    if (!bitwiseSame(a.lastParameterUpdate().innovation, b.lastParameterUpdate().innovation))
-      return differ("parameter innovation");
-    if (!bitwiseSame(a.lastParameterUpdate().innovationCovariance, b.lastParameterUpdate().innovationCovariance))
-      return differ("parameter innovation covariance");
-    if (!bitwiseSame(Eigen::Matrix<double, 1, 1>(a.lastParameterUpdate().nis),
-                     Eigen::Matrix<double, 1, 1>(b.lastParameterUpdate().nis)))
-      return differ("parameter NIS");
-  }
-  return ::testing::AssertionSuccess();
-}
 
 const std::vector<Model::Meas>& measurements() {
   static const std::vector<Model::Meas> rows = [] {
@@ -123,15 +88,15 @@ Filter diverged(Filter f) {
 // no time update before it, then the schedule.
 template <class Filter>
 void expectSameFromNowOn(Filter& reset, Filter& fresh) {
-  ASSERT_TRUE(same(reset, fresh)) << "right after reset";
+  ASSERT_TRUE(sameFilter(reset, fresh)) << "right after reset";
   ASSERT_FALSE(reset.hasPropagatedPoints());
   ASSERT_TRUE(mjukf::taken(reset.measurementUpdate(row(kHistory))));
   ASSERT_TRUE(mjukf::taken(fresh.measurementUpdate(row(kHistory))));
-  ASSERT_TRUE(same(reset, fresh)) << "after the first measurement update";
+  ASSERT_TRUE(sameFilter(reset, fresh)) << "after the first measurement update";
   for (long k = kHistory; k < kHistory + 600; k += 5) {
     schedule(reset, k, k + 5);
     schedule(fresh, k, k + 5);
-    ASSERT_TRUE(same(reset, fresh)) << "row " << k + 5;
+    ASSERT_TRUE(sameFilter(reset, fresh)) << "row " << k + 5;
   }
 }
 
@@ -321,11 +286,11 @@ void expectRejected(Filter& filter, const std::string& argument, Call&& call) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("'" + argument + "'"), std::string::npos) << "message: " << e.what();
   }
-  EXPECT_TRUE(same(filter, before)) << "the refused reset changed the filter (" << argument << ")";
+  EXPECT_TRUE(sameFilter(filter, before)) << "the refused reset changed the filter (" << argument << ")";
   Filter untouched = before;
   ASSERT_TRUE(mjukf::taken(filter.measurementUpdate(row(kHistory))));
   ASSERT_TRUE(mjukf::taken(untouched.measurementUpdate(row(kHistory))));
-  EXPECT_TRUE(same(filter, untouched)) << "the next update differs (" << argument << ")";
+  EXPECT_TRUE(sameFilter(filter, untouched)) << "the next update differs (" << argument << ")";
   ASSERT_TRUE(mjukf::taken(filter.timeUpdate(double(kHistory) * Robot::stepSize, Robot::stepSize)));
 }
 

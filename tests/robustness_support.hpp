@@ -10,7 +10,9 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <gtest/gtest.h>
 
+#include "mjukf/dual_ukf.hpp"
 #include "mjukf/integrators/i_tr_bdf2.hpp"
 #include "mjukf/joint_ukf.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
@@ -31,18 +33,38 @@ template <class T>
 struct IsModifiedJoint : std::false_type {};
 template <class M, class I>
 struct IsModifiedJoint<ModifiedJointUkf<M, I>> : std::true_type {};
+template <class T>
+struct IsDual : std::false_type {};
+template <class M, class I>
+struct IsDual<DualUkf<M, I>> : std::true_type {};
 
-/// True when everything a caller can observe of the two filters is bit for bit the same, NaN included.
-template <class Filter>
-bool sameFilter(const Filter& a, const Filter& b) {
-  bool same = bitwiseSame(a.state(), b.state()) && bitwiseSame(a.covariance(), b.covariance()) &&
-              bitwiseSame(a.parameters(), b.parameters()) &&
-              bitwiseSame(a.lastUpdate().innovation, b.lastUpdate().innovation) &&
-              bitwiseSame(a.lastUpdate().innovationCovariance, b.lastUpdate().innovationCovariance) &&
-              std::memcmp(&a.lastUpdate().nis, &b.lastUpdate().nis, sizeof(a.lastUpdate().nis)) == 0 &&
-              a.hasPropagatedPoints() == b.hasPropagatedPoints();
-  if constexpr (IsModifiedJoint<Filter>::value) same = same && bitwiseSame(a.parameterPoints(), b.parameterPoints());
-  return same;
+/// Success when everything a caller can observe of the two filters is bit for bit the same, NaN
+/// included; otherwise a failure naming what differs. The filters may be of different types with the
+/// same accessors (a continuous model and its discrete twin); A decides which accessors are compared.
+template <class A, class B>
+::testing::AssertionResult sameFilter(const A& a, const B& b) {
+  const auto differ = [](const char* what) { return ::testing::AssertionFailure() << what << " differs"; };
+  const auto sameScalar = [](auto x, auto y) { return std::memcmp(&x, &y, sizeof x) == 0; };
+  if (!bitwiseSame(a.state(), b.state())) return differ("state");
+  if (!bitwiseSame(a.covariance(), b.covariance())) return differ("covariance");
+  if (!bitwiseSame(a.parameters(), b.parameters())) return differ("parameters");
+  if (!bitwiseSame(a.lastUpdate().innovation, b.lastUpdate().innovation)) return differ("innovation");
+  if (!bitwiseSame(a.lastUpdate().innovationCovariance, b.lastUpdate().innovationCovariance))
+    return differ("innovation covariance");
+  if (!sameScalar(a.lastUpdate().nis, b.lastUpdate().nis)) return differ("NIS");
+  if (a.hasPropagatedPoints() != b.hasPropagatedPoints()) return differ("hasPropagatedPoints");
+  if constexpr (IsModifiedJoint<A>::value) {
+    if (!bitwiseSame(a.parameterPoints(), b.parameterPoints())) return differ("parameterPoints");
+  }
+  if constexpr (IsDual<A>::value) {
+    if (!bitwiseSame(a.parameterCovariance(), b.parameterCovariance())) return differ("parameterCovariance");
+    if (!bitwiseSame(a.lastParameterUpdate().innovation, b.lastParameterUpdate().innovation))
+      return differ("parameter innovation");
+    if (!bitwiseSame(a.lastParameterUpdate().innovationCovariance, b.lastParameterUpdate().innovationCovariance))
+      return differ("parameter innovation covariance");
+    if (!sameScalar(a.lastParameterUpdate().nis, b.lastParameterUpdate().nis)) return differ("parameter NIS");
+  }
+  return ::testing::AssertionSuccess();
 }
 
 /// Exactly symmetric (P == Pᵀ bit for bit, as every commit symmetrises) and with a Cholesky factor.

@@ -9,6 +9,7 @@
 
 #include "mjukf/integrators/i_tr_bdf2.hpp"
 #include "mjukf/joint_ukf.hpp"
+#include "mjukf/models/flexible_joint.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
 #include "mjukf/ukf.hpp"
 
@@ -67,6 +68,38 @@ Eigen::Matrix<double, N, N> randomCovariance(std::mt19937_64& rng, double scale 
 }  // namespace mjukf::testing
 
 namespace mjukf::testing {
+
+/// Explicit Euler, x + h f(t, x): one evaluation of f per step, so a model's derivative count is the
+/// number of propagations of a point, and a component with zero derivative stays bit for bit unchanged.
+template <class Scalar_ = double>
+struct Euler {
+  using Scalar = Scalar_;
+  [[maybe_unused]] static constexpr int order = 1, evaluationsPerStep = 1;  // the stepper convention
+  template <class F, class State>
+  State step(F&& f, Scalar t, const State& x, Scalar h) const {
+    return x + h * f(t, x);
+  }
+};
+
+/// The flexible-joint robot discretised by explicit Euler, as a discrete-time model:
+/// x_k = x_{k−1} + dt f(t, x_{k−1}, u(t), θ), with FlexibleJoint's measurement and input signal. Under
+/// any filter it computes what the continuous robot under Euler does, with the same operations.
+template <class Scalar_ = double>
+struct DiscreteRobot {
+  using Continuous = models::FlexibleJoint<Scalar_>;
+  using Scalar = Scalar_;
+  static constexpr int StateDim = 4, ParamDim = 2, MeasDim = 4, InputDim = 1;
+  using State = typename Continuous::State;
+  using Param = typename Continuous::Param;
+  using Meas = typename Continuous::Meas;
+  using Input = typename Continuous::Input;
+  Continuous robot;
+  Input input(Scalar t) const { return robot.input(t); }
+  State transition(Scalar t, Scalar dt, const State& x, const Input& u, const Param& theta) const {
+    return x + dt * robot.derivative(t, x, u, theta);
+  }
+  Meas measurement(const State& x, const Param& theta) const { return robot.measurement(x, theta); }
+};
 
 /// The three filters on one experiment of the paper, built with its settings, so typed tests can
 /// sweep filter × plant.
