@@ -54,14 +54,15 @@ void symmetrize(Matrix& p) {
     for (int r = c + 1; r < p.rows(); ++r) p(r, c) = p(c, r) = Scalar(0.5) * p(r, c) + Scalar(0.5) * p(c, r);
 }
 
-// P₀ made exactly symmetric at construction, like every P a step commits, and checked to still have a
-// Cholesky factor (validation factored the lower triangle of the matrix as given), which is written to
-// `factor`: the filter draws its first sigma points from it.
-template <class Matrix>
-void symmetrizeInitialCovariance(const char* owner, Matrix& p0, Matrix& factor) {
-  symmetrize(p0);
-  if (!allFinite(p0) || !choleskyLower(p0, factor))
-    throwInvalid(owner, "initialCovariance (P0)", "must be positive definite");
+// A covariance a filter starts from (P₀, or the argument of reset()): symmetric positive definite as
+// given, and still with a Cholesky factor once symmetrised, as every committed P is. Throws naming
+// `setting` otherwise; after it passes, UnscentedCore::assign() cannot fail on it.
+template <class Derived>
+void requireCommittableCovariance(const char* owner, const char* setting, const Eigen::MatrixBase<Derived>& m) {
+  requirePositiveDefinite(owner, setting, m);
+  typename Derived::PlainObject symmetric = m, factor;
+  symmetrize(symmetric);
+  if (!choleskyLower(symmetric, factor)) throwInvalid(owner, setting, "must be positive definite");
 }
 
 // The check and repair of a covariance about to be committed; the workspace is a member, so it

@@ -89,8 +89,7 @@ class DualUkf : public detail::UnscentedEngine<DualUkf<Model_, Integrator_>, Mod
         parameterCore_(settings.parameterSigmaPoints),
         parameterNoise_(settings.measurementNoise + settings.parameterObservationNoise),
         boundsActive_(settings.parameterBounds.active()) {
-    if (!parameterCore_.assign(initialParameters, settings.initialParameterCovariance))
-      detail::throwInvalid(kOwner, "initialParameterCovariance", "must be positive definite");
+    parameterCore_.assign(initialParameters, settings.initialParameterCovariance);  // checked in checked()
   }
 
   const State& state() const { return this->core_.mean(); }
@@ -119,13 +118,9 @@ class DualUkf : public detail::UnscentedEngine<DualUkf<Model_, Integrator_>, Mod
     detail::requireFinite(kOwner, "parameters", parameters);
     detail::validateBounds(kOwner, this->settings_.parameterBounds, parameters, "parameters");
     this->checkResetCovariance(kOwner, covariance);
-    detail::requirePositiveDefinite(kOwner, "parameterCovariance", parameterCovariance);
-    ParamMatrix symmetric = parameterCovariance, factor;
-    detail::symmetrize(symmetric);
-    if (!detail::choleskyLower(symmetric, factor))
-      detail::throwInvalid(kOwner, "parameterCovariance", "must be positive definite");
+    detail::requireCommittableCovariance(kOwner, "parameterCovariance", parameterCovariance);
     this->resetEstimate(state, covariance);
-    parameterCore_.assign(parameters, parameterCovariance);
+    parameterCore_.assign(parameters, parameterCovariance);  // checked above
     hasPrior_ = false;
   }
 
@@ -144,7 +139,7 @@ class DualUkf : public detail::UnscentedEngine<DualUkf<Model_, Integrator_>, Mod
 
   static const State& checked(const State& initialState, const Param& initialParameters, const Settings& settings) {
     detail::checkInitialValues(kOwner, initialState, initialParameters, settings.parameterBounds);
-    detail::requirePositiveDefinite(kOwner, "initialParameterCovariance", settings.initialParameterCovariance);
+    detail::requireCommittableCovariance(kOwner, "initialParameterCovariance", settings.initialParameterCovariance);
     detail::requirePositiveSemiDefinite(kOwner, "parameterProcessNoise", settings.parameterProcessNoise);
     detail::requirePositiveSemiDefinite(kOwner, "parameterObservationNoise", settings.parameterObservationNoise);
     if (!(settings.parameterForgetting > 0 && settings.parameterForgetting <= 1))

@@ -113,24 +113,18 @@ class UnscentedEngine {
   UnscentedEngine(const char* owner, const Model& model, const Integrator& integrator, const Settings& settings,
                   const Vector& initialMean)
       : model_(model), integrator_(integrator), settings_(settings), core_(settings.sigmaPoints) {
-    requirePositiveDefinite(owner, "initialCovariance (P0)", settings.initialCovariance);
+    requireCommittableCovariance(owner, "initialCovariance (P0)", settings.initialCovariance);
     requirePositiveSemiDefinite(owner, "processNoise (Q)", settings.processNoise);
     requirePositiveDefinite(owner, "measurementNoise (R)", settings.measurementNoise);
     validateRepair(owner, settings.repair);
     validateGate(owner, settings.gate);
-    // Every committed P is exactly symmetric, P₀ too; validation factored P₀ as given, and its
-    // symmetrised form must still have a factor.
-    if (!core_.assign(initialMean, settings.initialCovariance))
-      throwInvalid(owner, "initialCovariance (P0)", "must be positive definite");
+    core_.assign(initialMean, settings.initialCovariance);  // symmetrised, as every committed P is
   }
 
   // The covariance argument of reset() checked like P₀; nothing changes when it throws. The mean is
   // checked by the filter, which names its parts.
   void checkResetCovariance(const char* owner, const Matrix& covariance) const {
-    requirePositiveDefinite(owner, "covariance", covariance);
-    Matrix symmetric = covariance, factor;
-    symmetrize(symmetric);
-    if (!choleskyLower(symmetric, factor)) throwInvalid(owner, "covariance", "must be positive definite");
+    requireCommittableCovariance(owner, "covariance", covariance);
   }
   // Commits a reset that checkResetCovariance() accepted: cannot fail.
   void resetEstimate(const Vector& mean, const Matrix& covariance) { core_.assign(mean, covariance); }
