@@ -62,31 +62,12 @@ using Robot = mjukf::paper::FlexibleJointExperiment<double>;
 using ContinuousIntegrator = Euler<double>;
 using DiscreteIntegrator = mjukf::NoIntegrator<double>;
 
-// The robot's preset for filter template F, as the settings of F over `Model` (the shared part of the
-// settings is the same type for both models; the rest is copied field by field).
+// The robot's preset for filter template F, as the settings of F over `Model`, in the given ordering
+// when F is the dual filter.
 template <template <class, class> class F, class Model>
-typename F<Model, mjukf::DefaultIntegrator<Model>>::Settings robotSettings(DualUkfOrdering ordering) {
-  typename F<Model, mjukf::DefaultIntegrator<Model>>::Settings s;
-  if constexpr (std::is_same_v<F<Model, int>, mjukf::Ukf<Model, int>>) {
-    static_cast<mjukf::UnscentedSettings<double, 4, 4>&>(s) = Robot::ukf();
-  } else if constexpr (std::is_same_v<F<Model, int>, mjukf::JointUkf<Model, int>>) {
-    static_cast<mjukf::ParameterEstimationSettings<double, 6, 4, 2>&>(s) = Robot::jointUkf();
-  } else if constexpr (std::is_same_v<F<Model, int>, mjukf::ModifiedJointUkf<Model, int>>) {
-    const auto m = Robot::modifiedJointUkf();
-    static_cast<mjukf::ParameterEstimationSettings<double, 4, 4, 2>&>(s) = m;
-    s.scaling = m.scaling;
-    s.transformation = m.transformation;
-    s.parameterSpread = m.parameterSpread;
-  } else {
-    const auto d = Robot::dualUkf();
-    static_cast<mjukf::ParameterEstimationSettings<double, 4, 4, 2>&>(s) = d;
-    s.parameterSigmaPoints = d.parameterSigmaPoints;
-    s.initialParameterCovariance = d.initialParameterCovariance;
-    s.parameterProcessNoise = d.parameterProcessNoise;
-    s.parameterObservationNoise = d.parameterObservationNoise;
-    s.parameterForgetting = d.parameterForgetting;
-    s.ordering = ordering;
-  }
+auto robotSettings(DualUkfOrdering ordering) {
+  auto s = mjukf::testing::presetSettings<F, Robot, Model>();
+  if constexpr (IsDual<F<Model, mjukf::DefaultIntegrator<Model>>>::value) s.ordering = ordering;
   return s;
 }
 

@@ -75,6 +75,7 @@ struct DualCase {
 };
 
 using mjukf::testing::DiscreteRobot;  // the robot as a discrete-time model: no integrator
+using mjukf::testing::IsDual;
 static_assert(mjukf::isDiscreteTime<DiscreteRobot<double>>);
 
 // Each filter over DiscreteRobot with the robot's settings for it (the settings' shared part is the same
@@ -86,31 +87,12 @@ struct DiscreteCase {
   using Model = DiscreteRobot<Scalar>;
   using Filter = F<Model, mjukf::NoIntegrator<Scalar>>;
   static Filter make() {
-    typename Filter::Settings s;
-    if constexpr (std::is_same_v<Filter, mjukf::Ukf<Model, mjukf::NoIntegrator<Scalar>>>) {
-      static_cast<mjukf::UnscentedSettings<Scalar, 4, 4>&>(s) = E::ukf();
-      return Filter(Model(), E::initialState(), E::Model::trueParameters(), s);
-    } else if constexpr (std::is_same_v<Filter, mjukf::JointUkf<Model, mjukf::NoIntegrator<Scalar>>>) {
-      static_cast<mjukf::ParameterEstimationSettings<Scalar, 6, 4, 2>&>(s) = E::jointUkf();
-      return Filter(Model(), E::initialState(), E::initialParameters(), s);
-    } else if constexpr (std::is_same_v<Filter, mjukf::ModifiedJointUkf<Model, mjukf::NoIntegrator<Scalar>>>) {
-      const auto m = E::modifiedJointUkf();
-      static_cast<mjukf::ParameterEstimationSettings<Scalar, 4, 4, 2>&>(s) = m;
-      s.scaling = m.scaling;
-      s.transformation = m.transformation;
-      s.parameterSpread = m.parameterSpread;
-      return Filter(Model(), E::initialState(), E::initialParameters(), s);
-    } else {
-      const auto d = E::dualUkf();
-      static_cast<mjukf::ParameterEstimationSettings<Scalar, 4, 4, 2>&>(s) = d;
-      s.parameterSigmaPoints = d.parameterSigmaPoints;
-      s.initialParameterCovariance = d.initialParameterCovariance;
-      s.parameterProcessNoise = d.parameterProcessNoise;
-      s.parameterObservationNoise = d.parameterObservationNoise;
-      s.parameterForgetting = d.parameterForgetting;
-      s.ordering = Ordering;
-      return Filter(Model(), E::initialState(), E::initialParameters(), s);
-    }
+    auto s = mjukf::testing::presetSettings<F, E, Model>();
+    if constexpr (IsDual<Filter>::value) s.ordering = Ordering;
+    const auto theta0 = std::is_same_v<Filter, mjukf::Ukf<Model, mjukf::NoIntegrator<Scalar>>>
+                            ? E::Model::trueParameters()
+                            : E::initialParameters();
+    return Filter(Model(), E::initialState(), theta0, s);
   }
 };
 
@@ -216,8 +198,6 @@ TYPED_TEST(NoAllocation, MaskingGatingBoundsAndRepair) {
   EXPECT_EQ(status[5], Status::MeasurementRejected);
   EXPECT_EQ(status[6], Status::Repaired);
 }
-
-using mjukf::testing::IsDual;
 
 // reset() with valid arguments, every overload, then the steps after it.
 TYPED_TEST(NoAllocation, Reset) {
