@@ -35,13 +35,13 @@ struct CovarianceRepair {
 namespace detail {
 
 template <class Scalar>
-void validateRepair(const char* owner, const CovarianceRepair<Scalar>& repair) {
-  if (repair.maxAttempts < 0 || repair.maxAttempts > 64)
-    throwInvalid(owner, "repair.maxAttempts", "must be in [0, 64]");
-  requireFinite(owner, "repair.firstJitter", repair.firstJitter);
-  requireFinite(owner, "repair.growth", repair.growth);
-  if (!(repair.firstJitter > 0)) throwInvalid(owner, "repair.firstJitter", "must be positive");
-  if (!(repair.growth >= 1)) throwInvalid(owner, "repair.growth", "must be >= 1");
+SettingsError validateRepair(const char* owner, const CovarianceRepair<Scalar>& repair) {
+  if (repair.maxAttempts < 0 || repair.maxAttempts > 64) return invalid(owner, "repair.maxAttempts", "must be in [0, 64]");
+  if (SettingsError e = requireFinite(owner, "repair.firstJitter", repair.firstJitter)) return e;
+  if (SettingsError e = requireFinite(owner, "repair.growth", repair.growth)) return e;
+  if (!(repair.firstJitter > 0)) return invalid(owner, "repair.firstJitter", "must be positive");
+  if (!(repair.growth >= 1)) return invalid(owner, "repair.growth", "must be >= 1");
+  return {};
 }
 
 // P ← (P + Pᵀ)/2 in place, a triangle at a time (no temporary, no aliasing). Halved before the sum,
@@ -55,14 +55,16 @@ void symmetrize(Matrix& p) {
 }
 
 // A covariance a filter starts from (P₀, or the argument of reset()): symmetric positive definite as
-// given, and still with a Cholesky factor once symmetrised, as every committed P is. Throws naming
+// given, and still with a Cholesky factor once symmetrised, as every committed P is. An error naming
 // `setting` otherwise; after it passes, UnscentedCore::assign() cannot fail on it.
 template <class Derived>
-void requireCommittableCovariance(const char* owner, const char* setting, const Eigen::MatrixBase<Derived>& m) {
-  requirePositiveDefinite(owner, setting, m);
+SettingsError requireCommittableCovariance(const char* owner, const char* setting,
+                                           const Eigen::MatrixBase<Derived>& m) {
+  if (SettingsError e = requirePositiveDefinite(owner, setting, m)) return e;
   typename Derived::PlainObject symmetric = m, factor;
   symmetrize(symmetric);
-  if (!choleskyLower(symmetric, factor)) throwInvalid(owner, setting, "must be positive definite");
+  if (!choleskyLower(symmetric, factor)) return invalid(owner, setting, "must be positive definite");
+  return {};
 }
 
 // The check and repair of a covariance about to be committed; the workspace is a member, so it

@@ -15,6 +15,8 @@
 #include "mjukf/filter_settings.hpp"
 #include "mjukf/model.hpp"
 #include "mjukf/parameter_bounds.hpp"
+#include "mjukf/result.hpp"
+#include "mjukf/settings_error.hpp"
 
 namespace mjukf {
 
@@ -82,14 +84,40 @@ class DualUkf : public detail::UnscentedEngine<DualUkf<Model_, Integrator_>, Mod
   using StateMatrix = Eigen::Matrix<Scalar, StateDim, StateDim>;
   using ParamMatrix = Eigen::Matrix<Scalar, ParamDim, ParamDim>;
 
-  /// Throws std::invalid_argument naming the setting when a setting or the initial values are invalid.
+#if MJUKF_EXCEPTIONS
+  /// Throws std::invalid_argument naming the setting when a setting or the initial values are invalid
+  /// (`validate`). Without exceptions, use `create`.
   DualUkf(const Model_& model, const State& initialState, const Param& initialParameters, const Settings& settings,
           const Integrator_& integrator = Integrator_())
-      : Engine(kOwner, model, integrator, settings, checked(initialState, initialParameters, settings)),
-        parameterCore_(settings.parameterSigmaPoints),
-        parameterNoise_(settings.measurementNoise + settings.parameterObservationNoise),
-        boundsActive_(settings.parameterBounds.active()) {
-    parameterCore_.assign(initialParameters, settings.initialParameterCovariance);  // checked in checked()
+      : DualUkf(detail::throwIfInvalid(validate(initialState, initialParameters, settings)), model, initialState,
+                initialParameters, settings, integrator) {}
+#endif
+  /// The filter, or the SettingsError naming the first invalid setting or initial value: the way to
+  /// build one without exceptions (docs/embedded.md).
+  static Result<DualUkf> create(const Model_& model, const State& initialState, const Param& initialParameters,
+                                const Settings& settings, const Integrator_& integrator = Integrator_()) {
+    if (SettingsError e = validate(initialState, initialParameters, settings)) return e;
+    return {detail::BuildWith{}, [&] {
+              return DualUkf(detail::Validated{}, model, initialState, initialParameters, settings, integrator);
+            }};
+  }
+  /// The first invalid initial value or setting, or none: what the constructor would throw.
+  static SettingsError validate(const State& initialState, const Param& initialParameters, const Settings& settings) {
+    if (SettingsError e = detail::checkInitialValues(kOwner, initialState, initialParameters, settings.parameterBounds))
+      return e;
+    if (SettingsError e = detail::requireCommittableCovariance(kOwner, "initialParameterCovariance",
+                                                               settings.initialParameterCovariance))
+      return e;
+    if (SettingsError e =
+            detail::requirePositiveSemiDefinite(kOwner, "parameterProcessNoise", settings.parameterProcessNoise))
+      return e;
+    if (SettingsError e = detail::requirePositiveSemiDefinite(kOwner, "parameterObservationNoise",
+                                                              settings.parameterObservationNoise))
+      return e;
+    if (!(settings.parameterForgetting > 0 && settings.parameterForgetting <= 1))
+      return detail::invalid(kOwner, "parameterForgetting", "must lie in (0, 1]");
+    if (SettingsError e = Engine::validateSettings(kOwner, settings)) return e;
+    return ParameterCore::SigmaPoints::validate(settings.parameterSigmaPoints);
   }
 
   const State& state() const { return this->core_.mean(); }
@@ -101,27 +129,30 @@ class DualUkf : public detail::UnscentedEngine<DualUkf<Model_, Integrator_>, Mod
   /// Innovation, its covariance and NIS of the parameter filter's last successful correction.
   const UpdateDiagnostics<Scalar, MeasDim>& lastParameterUpdate() const { return parameterCore_.diagnostics(); }
 
-  /// Starts the state filter again from (state, covariance), keeping the parameter filter. Throws
-  /// std::invalid_argument naming the argument, and changes nothing, when one is not finite or the
-  /// covariance is not symmetric positive definite.
-  void reset(const State& state, const StateMatrix& covariance) {
-    reset(state, covariance, parameters(), parameterCovariance());
+  /// Starts the state filter again from (state, covariance), keeping the parameter filter. When one is
+  /// not finite or the covariance is not symmetric positive definite, it changes nothing and throws
+  /// std::invalid_argument naming the argument (without exceptions: returns the SettingsError;
+  /// ResetResult, settings_error.hpp).
+  ResetResult reset(const State& state, const StateMatrix& covariance) {
+    return reset(state, covariance, parameters(), parameterCovariance());
   }
   /// Starts again from (state, covariance) and θ̂ = `parameters`, keeping P^θ.
-  void reset(const State& state, const StateMatrix& covariance, const Param& parameters) {
-    reset(state, covariance, parameters, parameterCovariance());
+  ResetResult reset(const State& state, const StateMatrix& covariance, const Param& parameters) {
+    return reset(state, covariance, parameters, parameterCovariance());
   }
   /// Starts both filters again: (state, covariance) and (parameters, parameterCovariance).
-  void reset(const State& state, const StateMatrix& covariance, const Param& parameters,
-             const ParamMatrix& parameterCovariance) {
-    detail::requireFinite(kOwner, "state", state);
-    detail::requireFinite(kOwner, "parameters", parameters);
-    detail::validateBounds(kOwner, this->settings_.parameterBounds, parameters, "parameters");
-    this->checkResetCovariance(kOwner, covariance);
-    detail::requireCommittableCovariance(kOwner, "parameterCovariance", parameterCovariance);
+  ResetResult reset(const State& state, const StateMatrix& covariance, const Param& parameters,
+                    const ParamMatrix& parameterCovariance) {
+    if (SettingsError e = detail::checkInitialValues(kOwner, state, parameters, this->settings_.parameterBounds,
+                                                     "state", "parameters"))
+      return detail::report(e);
+    if (SettingsError e = Engine::checkResetCovariance(kOwner, covariance)) return detail::report(e);
+    if (SettingsError e = detail::requireCommittableCovariance(kOwner, "parameterCovariance", parameterCovariance))
+      return detail::report(e);
     this->resetEstimate(state, covariance);
     parameterCore_.assign(parameters, parameterCovariance);  // checked above
     hasPrior_ = false;
+    return ResetResult();
   }
 
  private:
@@ -137,14 +168,13 @@ class DualUkf : public detail::UnscentedEngine<DualUkf<Model_, Integrator_>, Mod
     Input held = Input::Zero();
   };
 
-  static const State& checked(const State& initialState, const Param& initialParameters, const Settings& settings) {
-    detail::checkInitialValues(kOwner, initialState, initialParameters, settings.parameterBounds);
-    detail::requireCommittableCovariance(kOwner, "initialParameterCovariance", settings.initialParameterCovariance);
-    detail::requirePositiveSemiDefinite(kOwner, "parameterProcessNoise", settings.parameterProcessNoise);
-    detail::requirePositiveSemiDefinite(kOwner, "parameterObservationNoise", settings.parameterObservationNoise);
-    if (!(settings.parameterForgetting > 0 && settings.parameterForgetting <= 1))
-      detail::throwInvalid(kOwner, "parameterForgetting", "must lie in (0, 1]");
-    return initialState;
+  DualUkf(detail::Validated, const Model_& model, const State& initialState, const Param& initialParameters,
+          const Settings& settings, const Integrator_& integrator)
+      : Engine(detail::Validated{}, model, integrator, settings, initialState),
+        parameterCore_(detail::Validated{}, settings.parameterSigmaPoints),
+        parameterNoise_(settings.measurementNoise + settings.parameterObservationNoise),
+        boundsActive_(settings.parameterBounds.active()) {
+    parameterCore_.assign(initialParameters, settings.initialParameterCovariance);  // checked in validate()
   }
 
   // The parameters the state filter runs with: θ̂⁻, or θ̂_k while the UpdatedParameters ordering

@@ -11,6 +11,8 @@
 #include "mjukf/filter_settings.hpp"
 #include "mjukf/model.hpp"
 #include "mjukf/parameter_bounds.hpp"
+#include "mjukf/result.hpp"
+#include "mjukf/settings_error.hpp"
 
 namespace mjukf {
 
@@ -47,11 +49,29 @@ class JointUkf : public detail::UnscentedEngine<JointUkf<Model_, Integrator_>, M
   using AugmentedState = Eigen::Matrix<Scalar, AugmentedDim, 1>;
   using AugmentedMatrix = Eigen::Matrix<Scalar, AugmentedDim, AugmentedDim>;
 
-  /// Throws std::invalid_argument naming the setting when a setting or the initial values are invalid.
+#if MJUKF_EXCEPTIONS
+  /// Throws std::invalid_argument naming the setting when a setting or the initial values are invalid
+  /// (`validate`). Without exceptions, use `create`.
   JointUkf(const Model_& model, const State& initialState, const Param& initialParameters, const Settings& settings,
            const Integrator_& integrator = Integrator_())
-      : Engine(kOwner, model, integrator, settings, augment(initialState, initialParameters, settings.parameterBounds)),
-        boundsActive_(settings.parameterBounds.active()) {}
+      : JointUkf(detail::throwIfInvalid(validate(initialState, initialParameters, settings)), model, initialState,
+                 initialParameters, settings, integrator) {}
+#endif
+  /// The filter, or the SettingsError naming the first invalid setting or initial value: the way to
+  /// build one without exceptions (docs/embedded.md).
+  static Result<JointUkf> create(const Model_& model, const State& initialState, const Param& initialParameters,
+                                 const Settings& settings, const Integrator_& integrator = Integrator_()) {
+    if (SettingsError e = validate(initialState, initialParameters, settings)) return e;
+    return {detail::BuildWith{}, [&] {
+              return JointUkf(detail::Validated{}, model, initialState, initialParameters, settings, integrator);
+            }};
+  }
+  /// The first invalid initial value or setting, or none: what the constructor would throw.
+  static SettingsError validate(const State& initialState, const Param& initialParameters, const Settings& settings) {
+    if (SettingsError e = detail::checkInitialValues(kOwner, initialState, initialParameters, settings.parameterBounds))
+      return e;
+    return Engine::validateSettings(kOwner, settings);
+  }
 
   /// The state block x of the augmented mean.
   State state() const { return augmentedState().template head<StateDim>(); }
@@ -62,25 +82,32 @@ class JointUkf : public detail::UnscentedEngine<JointUkf<Model_, Integrator_>, M
   const AugmentedMatrix& covariance() const { return this->core_.covariance(); }
 
   /// Starts again from the state, the augmented covariance of [x; θ] and the current parameters.
-  /// Throws std::invalid_argument naming the argument, and changes nothing, when one is not finite,
-  /// the covariance is not symmetric positive definite, or the parameters lie outside the bounds.
-  void reset(const State& state, const AugmentedMatrix& covariance) { reset(state, covariance, parameters()); }
+  /// When one is not finite, the covariance is not symmetric positive definite, or the parameters lie
+  /// outside the bounds, it changes nothing and throws std::invalid_argument naming the argument
+  /// (without exceptions: returns the SettingsError; ResetResult, settings_error.hpp).
+  ResetResult reset(const State& state, const AugmentedMatrix& covariance) {
+    return reset(state, covariance, parameters());
+  }
   /// Starts again from [state; parameters] and the augmented covariance.
-  void reset(const State& state, const AugmentedMatrix& covariance, const Param& parameters) {
-    const AugmentedState mean = augment(state, parameters, this->settings_.parameterBounds, "state", "parameters");
-    this->checkResetCovariance(kOwner, covariance);
-    this->resetEstimate(mean, covariance);
+  ResetResult reset(const State& state, const AugmentedMatrix& covariance, const Param& parameters) {
+    if (SettingsError e = detail::checkInitialValues(kOwner, state, parameters, this->settings_.parameterBounds,
+                                                     "state", "parameters"))
+      return detail::report(e);
+    if (SettingsError e = Engine::checkResetCovariance(kOwner, covariance)) return detail::report(e);
+    this->resetEstimate(augment(state, parameters), covariance);
+    return ResetResult();
   }
 
  private:
   static constexpr const char* kOwner = "mjukf::JointUkf";
 
-  // [x; θ], each checked and named as the caller calls it.
-  static AugmentedState augment(const State& x, const Param& theta, const ParameterBounds<Scalar, ParamDim>& bounds,
-                                const char* stateName = "initialState", const char* parametersName = "initialParameters") {
-    detail::requireFinite(kOwner, stateName, x);
-    detail::requireFinite(kOwner, parametersName, theta);
-    detail::validateBounds(kOwner, bounds, theta, parametersName);
+  JointUkf(detail::Validated, const Model_& model, const State& initialState, const Param& initialParameters,
+           const Settings& settings, const Integrator_& integrator)
+      : Engine(detail::Validated{}, model, integrator, settings, augment(initialState, initialParameters)),
+        boundsActive_(settings.parameterBounds.active()) {}
+
+  // [x; θ]
+  static AugmentedState augment(const State& x, const Param& theta) {
     AugmentedState z;
     z.template head<StateDim>() = x;
     z.template tail<ParamDim>() = theta;

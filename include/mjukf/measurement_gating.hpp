@@ -68,9 +68,10 @@ struct MeasurementGate {
 namespace detail {
 
 template <class Scalar, int MeasDim>
-void validateGate(const char* owner, const MeasurementGate<Scalar, MeasDim>& gate) {
+SettingsError validateGate(const char* owner, const MeasurementGate<Scalar, MeasDim>& gate) {
   if (!(gate.nisThreshold.array() > Scalar(0)).all())
-    throwInvalid(owner, "gate.nisThreshold", "must be positive (+infinity turns the gate off)");
+    return invalid(owner, "gate.nisThreshold", "must be positive (+infinity turns the gate off)");
+  return {};
 }
 
 // True when every present component of y is finite.

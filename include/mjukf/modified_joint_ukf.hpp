@@ -13,6 +13,8 @@
 #include "mjukf/filter_settings.hpp"
 #include "mjukf/model.hpp"
 #include "mjukf/parameter_bounds.hpp"
+#include "mjukf/result.hpp"
+#include "mjukf/settings_error.hpp"
 
 namespace mjukf {
 
@@ -69,12 +71,40 @@ class ModifiedJointUkf
   using Transformation = Eigen::Matrix<Scalar, ParamDim, MeasDim>;
   using ParamPoints = Eigen::Matrix<Scalar, ParamDim, SigmaPointCount>;
 
-  /// Throws std::invalid_argument naming the setting when a setting or the initial values are invalid.
+#if MJUKF_EXCEPTIONS
+  /// Throws std::invalid_argument naming the setting when a setting or the initial values are invalid
+  /// (`validate`). Without exceptions, use `create`.
   ModifiedJointUkf(const Model_& model, const State& initialState, const Param& initialParameters,
                    const Settings& settings, const Integrator_& integrator = Integrator_())
-      : Engine(kOwner, model, integrator, settings, checked(initialState, initialParameters, settings)),
-        boundsActive_(settings.parameterBounds.active()) {
-    spreadParameters(initialParameters);
+      : ModifiedJointUkf(detail::throwIfInvalid(validate(initialState, initialParameters, settings)), model,
+                         initialState, initialParameters, settings, integrator) {}
+#endif
+  /// The filter, or the SettingsError naming the first invalid setting or initial value: the way to
+  /// build one without exceptions (docs/embedded.md).
+  static Result<ModifiedJointUkf> create(const Model_& model, const State& initialState,
+                                         const Param& initialParameters, const Settings& settings,
+                                         const Integrator_& integrator = Integrator_()) {
+    if (SettingsError e = validate(initialState, initialParameters, settings)) return e;
+    return {detail::BuildWith{}, [&] {
+              return ModifiedJointUkf(detail::Validated{}, model, initialState, initialParameters, settings,
+                                      integrator);
+            }};
+  }
+  /// The first invalid initial value or setting, or none: what the constructor would throw.
+  static SettingsError validate(const State& initialState, const Param& initialParameters, const Settings& settings) {
+    if (SettingsError e = detail::checkInitialValues(kOwner, initialState, initialParameters, settings.parameterBounds))
+      return e;
+    if (SettingsError e = detail::requireFinite(kOwner, "scaling (xi)", settings.scaling)) return e;
+    if (SettingsError e = detail::requireFinite(kOwner, "transformation (T)", settings.transformation)) return e;
+    if (SettingsError e = detail::requireFinite(kOwner, "parameterSpread (p_theta)", settings.parameterSpread))
+      return e;
+    // The rows of T sum to 1 (paper eq. 14): T only distributes the error, ξ sets its scale. A T that
+    // does not is almost always a typo or a transposed matrix.
+    const auto rowSums = settings.transformation.rowwise().sum();
+    const Scalar tolerance = Scalar(1000) * Eigen::NumTraits<Scalar>::epsilon() * Scalar(MeasDim);
+    if ((rowSums.array() - Scalar(1)).abs().maxCoeff() > tolerance)
+      return detail::invalid(kOwner, "transformation (T)", "must have rows that each sum to 1");
+    return Engine::validateSettings(kOwner, settings);
   }
 
   const State& state() const { return this->core_.mean(); }
@@ -84,40 +114,36 @@ class ModifiedJointUkf
   /// The θᵢ, one column per sigma point, in the order of the sigma points.
   const ParamPoints& parameterPoints() const { return parameterPoints_; }
 
-  /// Starts again from (state, covariance), keeping θ̂ and the θᵢ. Throws std::invalid_argument naming
-  /// the argument, and changes nothing, when one is not finite or the covariance is not symmetric
-  /// positive definite.
-  void reset(const State& state, const StateMatrix& covariance) {
-    detail::requireFinite(kOwner, "state", state);
-    this->checkResetCovariance(kOwner, covariance);
+  /// Starts again from (state, covariance), keeping θ̂ and the θᵢ. When one is not finite or the
+  /// covariance is not symmetric positive definite, it changes nothing and throws
+  /// std::invalid_argument naming the argument (without exceptions: returns the SettingsError;
+  /// ResetResult, settings_error.hpp).
+  ResetResult reset(const State& state, const StateMatrix& covariance) {
+    if (SettingsError e = detail::requireFinite(kOwner, "state", state)) return detail::report(e);
+    if (SettingsError e = Engine::checkResetCovariance(kOwner, covariance)) return detail::report(e);
     this->resetEstimate(state, covariance);
+    return ResetResult();
   }
   /// Starts again from (state, covariance) and θ̂ = `parameters`, the θᵢ spread around it by eq. 8 as
   /// at construction. The parameters must also be finite and within the bounds.
-  void reset(const State& state, const StateMatrix& covariance, const Param& parameters) {
-    detail::requireFinite(kOwner, "state", state);
-    detail::requireFinite(kOwner, "parameters", parameters);
-    detail::validateBounds(kOwner, this->settings_.parameterBounds, parameters, "parameters");
-    this->checkResetCovariance(kOwner, covariance);
+  ResetResult reset(const State& state, const StateMatrix& covariance, const Param& parameters) {
+    if (SettingsError e = detail::checkInitialValues(kOwner, state, parameters, this->settings_.parameterBounds,
+                                                     "state", "parameters"))
+      return detail::report(e);
+    if (SettingsError e = Engine::checkResetCovariance(kOwner, covariance)) return detail::report(e);
     this->resetEstimate(state, covariance);
     spreadParameters(parameters);
+    return ResetResult();
   }
 
  private:
   static constexpr const char* kOwner = "mjukf::ModifiedJointUkf";
 
-  static const State& checked(const State& initialState, const Param& initialParameters, const Settings& settings) {
-    detail::checkInitialValues(kOwner, initialState, initialParameters, settings.parameterBounds);
-    detail::requireFinite(kOwner, "scaling (xi)", settings.scaling);
-    detail::requireFinite(kOwner, "transformation (T)", settings.transformation);
-    detail::requireFinite(kOwner, "parameterSpread (p_theta)", settings.parameterSpread);
-    // The rows of T sum to 1 (paper eq. 14): T only distributes the error, ξ sets its scale. A T that
-    // does not is almost always a typo or a transposed matrix.
-    const auto rowSums = settings.transformation.rowwise().sum();
-    const Scalar tolerance = Scalar(1000) * Eigen::NumTraits<Scalar>::epsilon() * Scalar(MeasDim);
-    if ((rowSums.array() - Scalar(1)).abs().maxCoeff() > tolerance)
-      detail::throwInvalid(kOwner, "transformation (T)", "must have rows that each sum to 1");
-    return initialState;
+  ModifiedJointUkf(detail::Validated, const Model_& model, const State& initialState, const Param& initialParameters,
+                   const Settings& settings, const Integrator_& integrator)
+      : Engine(detail::Validated{}, model, integrator, settings, initialState),
+        boundsActive_(settings.parameterBounds.active()) {
+    spreadParameters(initialParameters);
   }
 
   // Eq. 8: θᵢ = θ̂₀ − p_θ (n + 1) + p_θ (i + 1), i = 0 … 2n; their mean is θ̂₀.

@@ -48,22 +48,27 @@ namespace detail {
 
 // The bounds, and `initial` (named `initialName` in the message) within them.
 template <class Scalar, int ParamDim, class Initial>
-void validateBounds(const char* owner, const ParameterBounds<Scalar, ParamDim>& bounds, const Initial& initial,
-                    const char* initialName = "initialParameters") {
-  if (bounds.lower.hasNaN() || bounds.upper.hasNaN()) throwInvalid(owner, "parameterBounds", "must not be NaN");
+SettingsError validateBounds(const char* owner, const ParameterBounds<Scalar, ParamDim>& bounds,
+                             const Initial& initial, const char* initialName = "initialParameters") {
+  if (bounds.lower.hasNaN() || bounds.upper.hasNaN()) return invalid(owner, "parameterBounds", "must not be NaN");
   if (!(bounds.lower.array() <= bounds.upper.array()).all())
-    throwInvalid(owner, "parameterBounds", "must have lower <= upper");
+    return invalid(owner, "parameterBounds", "must have lower <= upper");
   if (!(initial.array() >= bounds.lower.array()).all() || !(initial.array() <= bounds.upper.array()).all())
-    throwInvalid(owner, initialName, "must lie within parameterBounds");
+    return invalid(owner, initialName, "must lie within parameterBounds");
+  return {};
 }
 
 // The initial values of a filter that estimates parameters: finite, and the parameters in the bounds.
+// `stateName` and `parametersName` are the names the caller gives them (reset() calls them "state" and
+// "parameters").
 template <class State, class Param, class Scalar, int ParamDim>
-void checkInitialValues(const char* owner, const State& initialState, const Param& initialParameters,
-                        const ParameterBounds<Scalar, ParamDim>& bounds) {
-  requireFinite(owner, "initialState", initialState);
-  requireFinite(owner, "initialParameters", initialParameters);
-  validateBounds(owner, bounds, initialParameters);
+SettingsError checkInitialValues(const char* owner, const State& initialState, const Param& initialParameters,
+                                 const ParameterBounds<Scalar, ParamDim>& bounds,
+                                 const char* stateName = "initialState",
+                                 const char* parametersName = "initialParameters") {
+  if (SettingsError e = requireFinite(owner, stateName, initialState)) return e;
+  if (SettingsError e = requireFinite(owner, parametersName, initialParameters)) return e;
+  return validateBounds(owner, bounds, initialParameters, parametersName);
 }
 
 }  // namespace detail

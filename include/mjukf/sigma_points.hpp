@@ -10,6 +10,8 @@
 #include "mjukf/detail/cholesky.hpp"
 #include "mjukf/detail/finite.hpp"
 #include "mjukf/detail/validation.hpp"
+#include "mjukf/result.hpp"
+#include "mjukf/settings_error.hpp"
 #include "mjukf/status.hpp"
 
 namespace mjukf {
@@ -39,19 +41,38 @@ class MerweScaledSigmaPoints {
   using Points = Eigen::Matrix<Scalar, L, Count>;
   using Weights = Eigen::Matrix<Scalar, Count, 1>;
 
+  /// The default parameters (α = 1, β = 2, κ = 0), which are valid for every L.
+  MerweScaledSigmaPoints() : MerweScaledSigmaPoints(detail::Validated{}, SigmaPointParameters<Scalar>{}) {}
+#if MJUKF_EXCEPTIONS
   /// Throws std::invalid_argument naming the parameter when α ≤ 0, a value is not finite, or
-  /// L + λ ≤ 0.
-  explicit MerweScaledSigmaPoints(const SigmaPointParameters<Scalar>& parameters = {}) : parameters_(parameters) {
+  /// L + λ ≤ 0 (`validate`). Without exceptions, use `create`.
+  explicit MerweScaledSigmaPoints(const SigmaPointParameters<Scalar>& parameters)
+      : MerweScaledSigmaPoints(detail::throwIfInvalid(validate(parameters)), parameters) {}
+#endif
+  /// The points of `parameters`, or the SettingsError naming the invalid one.
+  static Result<MerweScaledSigmaPoints> create(const SigmaPointParameters<Scalar>& parameters) {
+    if (SettingsError e = validate(parameters)) return e;
+    return {detail::BuildWith{}, [&] { return MerweScaledSigmaPoints(detail::Validated{}, parameters); }};
+  }
+  /// The error of the first invalid parameter (α ≤ 0, a value not finite, or L + λ ≤ 0), or none.
+  static SettingsError validate(const SigmaPointParameters<Scalar>& parameters) {
     constexpr const char* owner = "mjukf::MerweScaledSigmaPoints";
-    detail::requireFinite(owner, "alpha", parameters.alpha);
-    detail::requireFinite(owner, "beta", parameters.beta);
-    detail::requireFinite(owner, "kappa", parameters.kappa);
-    if (!(parameters.alpha > 0)) detail::throwInvalid(owner, "alpha", "must be positive");
+    if (SettingsError e = detail::requireFinite(owner, "alpha", parameters.alpha)) return e;
+    if (SettingsError e = detail::requireFinite(owner, "beta", parameters.beta)) return e;
+    if (SettingsError e = detail::requireFinite(owner, "kappa", parameters.kappa)) return e;
+    if (!(parameters.alpha > 0)) return detail::invalid(owner, "alpha", "must be positive");
+    // L + λ computed as the constructor does, rounding included: a tiny α²(L + κ) can round to L + λ = 0.
+    const Scalar lambda = parameters.alpha * parameters.alpha * (Scalar(L) + parameters.kappa) - Scalar(L);
+    const Scalar spread = Scalar(L) + lambda;
+    if (!(spread > 0) || !std::isfinite(spread))
+      return detail::invalid(owner, "kappa", "gives L + lambda <= 0 (needs alpha^2 (L + kappa) > 0)");
+    return {};
+  }
+  /// From parameters that `validate` accepted (the filters' cores, after their own validation).
+  MerweScaledSigmaPoints(detail::Validated, const SigmaPointParameters<Scalar>& parameters) : parameters_(parameters) {
     const Scalar alpha2 = parameters.alpha * parameters.alpha;
     lambda_ = alpha2 * (Scalar(L) + parameters.kappa) - Scalar(L);  // λ = α²(L + κ) − L
     const Scalar spread = Scalar(L) + lambda_;                      // L + λ
-    if (!(spread > 0) || !std::isfinite(spread))
-      detail::throwInvalid(owner, "kappa", "gives L + lambda <= 0 (needs alpha^2 (L + kappa) > 0)");
     gamma_ = std::sqrt(spread);
     meanWeights_.setConstant(Scalar(1) / (Scalar(2) * spread));
     covarianceWeights_ = meanWeights_;

@@ -4,11 +4,16 @@
 /// Simulating a plant: a model integrated over a grid of steps, for simulated measurements, reference
 /// trajectories and tests. `stepModel` takes one step; `simulate` takes many and shows each state.
 
-#include <stdexcept>
+#include <limits>
 #include <type_traits>
 #include <utility>
 
 #include "mjukf/model.hpp"
+#include "mjukf/settings_error.hpp"
+
+#if MJUKF_EXCEPTIONS
+#include <stdexcept>
+#endif
 
 namespace mjukf {
 
@@ -97,7 +102,8 @@ typename Model::State stepModel(const Model& model, const Integrator& integrator
 ///                    for k = 0 … steps − 1), e.g. to change the plant's parameters at some row.
 /// \param visit       called as `visit(long k, Scalar t_k, const Model::State& x_k)`; the reference is
 ///                    valid during the call only.
-/// \throws std::invalid_argument when steps < 0.
+/// \throws std::invalid_argument when steps < 0. Without exceptions (settings_error.hpp), steps < 0
+///         visits nothing and returns a state of NaN, as a failed stepper step does.
 template <class Model, class Integrator, class Inputs, class Parameters, class Visit>
 typename Model::State simulate(const Model& model, const Integrator& integrator, const typename Model::State& x0,
                                const Inputs& inputs, const Parameters& parameters, typename Model::Scalar t0,
@@ -108,7 +114,13 @@ typename Model::State simulate(const Model& model, const Integrator& integrator,
   constexpr bool fixedParameters = std::is_convertible_v<const Parameters&, Param>;
   static_assert(fixedParameters || std::is_invocable_r_v<Param, const Parameters&, long>,
                 "the parameters must be a Model::Param or a callable long k -> Model::Param");
-  if (steps < 0) throw std::invalid_argument("simulate: steps must not be negative");
+  if (steps < 0) {
+#if MJUKF_EXCEPTIONS
+    throw std::invalid_argument("simulate: steps must not be negative");
+#else
+    return State::Constant(std::numeric_limits<Scalar>::quiet_NaN());
+#endif
+  }
   State x = x0;
   // A held input is evaluated once for the whole run rather than once per step.
   const auto input = detail::inputSource<Model>(inputs);

@@ -10,6 +10,8 @@
 #include "mjukf/detail/validation.hpp"
 #include "mjukf/filter_settings.hpp"
 #include "mjukf/model.hpp"
+#include "mjukf/result.hpp"
+#include "mjukf/settings_error.hpp"
 
 namespace mjukf {
 
@@ -40,10 +42,28 @@ class Ukf : public detail::UnscentedEngine<Ukf<Model_, Integrator_>, Model_, Int
   using StateMatrix = Eigen::Matrix<Scalar, Engine::StateDim, Engine::StateDim>;
   static constexpr int SigmaPointCount = 2 * Engine::StateDim + 1;
 
-  /// Throws std::invalid_argument naming the setting when a setting or the initial values are invalid.
+#if MJUKF_EXCEPTIONS
+  /// Throws std::invalid_argument naming the setting when a setting or the initial values are invalid
+  /// (`validate`). Without exceptions, use `create`.
   Ukf(const Model_& model, const State& initialState, const Param& parameters, const Settings& settings,
       const Integrator_& integrator = Integrator_())
-      : Engine(kOwner, model, integrator, settings, checked(initialState, parameters)), parameters_(parameters) {}
+      : Ukf(detail::throwIfInvalid(validate(initialState, parameters, settings)), model, initialState, parameters,
+            settings, integrator) {}
+#endif
+  /// The filter, or the SettingsError naming the first invalid setting or initial value: the way to
+  /// build one without exceptions (docs/embedded.md).
+  static Result<Ukf> create(const Model_& model, const State& initialState, const Param& parameters,
+                            const Settings& settings, const Integrator_& integrator = Integrator_()) {
+    if (SettingsError e = validate(initialState, parameters, settings)) return e;
+    return {detail::BuildWith{},
+            [&] { return Ukf(detail::Validated{}, model, initialState, parameters, settings, integrator); }};
+  }
+  /// The first invalid initial value or setting, or none: what the constructor would throw.
+  static SettingsError validate(const State& initialState, const Param& parameters, const Settings& settings) {
+    if (SettingsError e = detail::requireFinite(kOwner, "initialState", initialState)) return e;
+    if (SettingsError e = detail::requireFinite(kOwner, "parameters", parameters)) return e;
+    return Engine::validateSettings(kOwner, settings);
+  }
 
   const State& state() const { return this->core_.mean(); }
   const StateMatrix& covariance() const { return this->core_.covariance(); }
@@ -51,26 +71,26 @@ class Ukf : public detail::UnscentedEngine<Ukf<Model_, Integrator_>, Model_, Int
   const Param& parameters() const { return parameters_; }
 
   /// Starts again from (state, covariance), keeping the parameters: recovers a diverged filter without
-  /// rebuilding it. Throws std::invalid_argument naming the argument, and changes nothing, when one is
-  /// not finite or the covariance is not symmetric positive definite.
-  void reset(const State& state, const StateMatrix& covariance) { reset(state, covariance, parameters_); }
+  /// rebuilding it. When one is not finite or the covariance is not symmetric positive definite, it
+  /// changes nothing and throws std::invalid_argument naming the argument (without exceptions: returns
+  /// the SettingsError; ResetResult, settings_error.hpp).
+  ResetResult reset(const State& state, const StateMatrix& covariance) { return reset(state, covariance, parameters_); }
   /// Starts again from (state, covariance) with other fixed parameters.
-  void reset(const State& state, const StateMatrix& covariance, const Param& parameters) {
-    detail::requireFinite(kOwner, "state", state);
-    detail::requireFinite(kOwner, "parameters", parameters);
-    this->checkResetCovariance(kOwner, covariance);
+  ResetResult reset(const State& state, const StateMatrix& covariance, const Param& parameters) {
+    if (SettingsError e = detail::requireFinite(kOwner, "state", state)) return detail::report(e);
+    if (SettingsError e = detail::requireFinite(kOwner, "parameters", parameters)) return detail::report(e);
+    if (SettingsError e = Engine::checkResetCovariance(kOwner, covariance)) return detail::report(e);
     this->resetEstimate(state, covariance);
     parameters_ = parameters;
+    return ResetResult();
   }
 
  private:
   static constexpr const char* kOwner = "mjukf::Ukf";
 
-  static const State& checked(const State& initialState, const Param& parameters) {
-    detail::requireFinite(kOwner, "initialState", initialState);
-    detail::requireFinite(kOwner, "parameters", parameters);
-    return initialState;
-  }
+  Ukf(detail::Validated, const Model_& model, const State& initialState, const Param& parameters,
+      const Settings& settings, const Integrator_& integrator)
+      : Engine(detail::Validated{}, model, integrator, settings, initialState), parameters_(parameters) {}
 
   // χᵢ⁺ = Φ_h(χᵢ; t, θ)
   template <class InputSource>

@@ -35,8 +35,8 @@ class UnscentedCore {
   using Mask = MeasurementMask<M>;
   using Gate = MeasurementGate<Scalar, M>;
 
-  /// Throws std::invalid_argument naming α, β or κ when they are invalid (sigma_points.hpp).
-  explicit UnscentedCore(const SigmaPointParameters<Scalar>& parameters) : sigmaPoints_(parameters) {}
+  /// From sigma-point parameters that SigmaPoints::validate accepted (the filter's validate()).
+  UnscentedCore(Validated, const SigmaPointParameters<Scalar>& parameters) : sigmaPoints_(Validated{}, parameters) {}
 
   // ---- The committed estimate ----------------------------------------------------------------------
   const Vector& mean() const { return mean_; }

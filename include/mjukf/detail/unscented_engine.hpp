@@ -23,6 +23,7 @@
 #include "mjukf/detail/validation.hpp"
 #include "mjukf/filter_settings.hpp"
 #include "mjukf/model.hpp"
+#include "mjukf/settings_error.hpp"
 #include "mjukf/status.hpp"
 
 namespace mjukf::detail {
@@ -108,23 +109,30 @@ class UnscentedEngine {
   using MeasPoints = typename Core::MeasPoints;
   using Mask = MeasurementMask<MeasDim>;
 
-  // Validates the settings every filter shares (throws std::invalid_argument naming the setting) and
-  // starts from `initialMean` and P₀; the filter validates its own initial values first.
-  UnscentedEngine(const char* owner, const Model& model, const Integrator& integrator, const Settings& settings,
+  // The settings every filter shares, checked in this order after the filter's own initial values:
+  // the sigma points, P₀, Q, R, the repair and the gate. The first error, naming the setting, or none.
+  static SettingsError validateSettings(const char* owner, const Settings& settings) {
+    if (SettingsError e = Core::SigmaPoints::validate(settings.sigmaPoints)) return e;
+    if (SettingsError e = requireCommittableCovariance(owner, "initialCovariance (P0)", settings.initialCovariance))
+      return e;
+    if (SettingsError e = requirePositiveSemiDefinite(owner, "processNoise (Q)", settings.processNoise)) return e;
+    if (SettingsError e = requirePositiveDefinite(owner, "measurementNoise (R)", settings.measurementNoise)) return e;
+    if (SettingsError e = validateRepair(owner, settings.repair)) return e;
+    return validateGate(owner, settings.gate);
+  }
+
+  // Starts from `initialMean` and P₀, both accepted by the filter's validate() (which ends with
+  // validateSettings): nothing here can fail.
+  UnscentedEngine(Validated, const Model& model, const Integrator& integrator, const Settings& settings,
                   const Vector& initialMean)
-      : model_(model), integrator_(integrator), settings_(settings), core_(settings.sigmaPoints) {
-    requireCommittableCovariance(owner, "initialCovariance (P0)", settings.initialCovariance);
-    requirePositiveSemiDefinite(owner, "processNoise (Q)", settings.processNoise);
-    requirePositiveDefinite(owner, "measurementNoise (R)", settings.measurementNoise);
-    validateRepair(owner, settings.repair);
-    validateGate(owner, settings.gate);
+      : model_(model), integrator_(integrator), settings_(settings), core_(Validated{}, settings.sigmaPoints) {
     core_.assign(initialMean, settings.initialCovariance);  // symmetrised, as every committed P is
   }
 
-  // The covariance argument of reset() checked like P₀; nothing changes when it throws. The mean is
-  // checked by the filter, which names its parts.
-  void checkResetCovariance(const char* owner, const Matrix& covariance) const {
-    requireCommittableCovariance(owner, "covariance", covariance);
+  // The covariance argument of reset() checked like P₀; reset() changes nothing when it fails. The mean
+  // is checked by the filter, which names its parts.
+  static SettingsError checkResetCovariance(const char* owner, const Matrix& covariance) {
+    return requireCommittableCovariance(owner, "covariance", covariance);
   }
   // Commits a reset that checkResetCovariance() accepted: cannot fail.
   void resetEstimate(const Vector& mean, const Matrix& covariance) { core_.assign(mean, covariance); }

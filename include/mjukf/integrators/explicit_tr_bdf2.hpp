@@ -4,6 +4,8 @@
 /// An explicit, second-order TR-BDF2: I-TR-BDF2's stages fed the plain predictor slopes.
 
 #include "mjukf/detail/validation.hpp"
+#include "mjukf/result.hpp"
+#include "mjukf/settings_error.hpp"
 
 namespace mjukf {
 
@@ -30,14 +32,21 @@ class ExplicitTrBdf2 {
   static constexpr int order = 2;
   static constexpr int evaluationsPerStep = 3;
 
-  /// `gamma` is the fraction of the step taken by the trapezoidal stage, in (0, 1).
-  explicit ExplicitTrBdf2(Scalar gamma = Scalar(0.5)) : gamma_(gamma) {
-    if (!(gamma > 0 && gamma < 1))
-      detail::throwInvalid("mjukf::ExplicitTrBdf2", "gamma", "must lie in (0, 1)");
-    const Scalar bdf2 = gamma * (Scalar(2) - gamma);  // γ(2 − γ)
-    currentWeight_ = Scalar(1) / bdf2;
-    previousWeight_ = -(Scalar(1) - gamma) * (Scalar(1) - gamma) / bdf2;
-    slopeWeight_ = (Scalar(1) - gamma) / (Scalar(2) - gamma);
+  /// γ = 1/2, the paper's choice.
+  ExplicitTrBdf2() : ExplicitTrBdf2(detail::Validated{}, Scalar(0.5)) {}
+#if MJUKF_EXCEPTIONS
+  /// `gamma` is the fraction of the step taken by the trapezoidal stage, in (0, 1); throws
+  /// std::invalid_argument naming it otherwise. Without exceptions, use `create`.
+  explicit ExplicitTrBdf2(Scalar gamma) : ExplicitTrBdf2(detail::throwIfInvalid(validate(gamma)), gamma) {}
+#endif
+  /// The stepper, or the SettingsError naming `gamma` when it is not in (0, 1).
+  static Result<ExplicitTrBdf2> create(Scalar gamma) {
+    if (SettingsError e = validate(gamma)) return e;
+    return {detail::BuildWith{}, [&] { return ExplicitTrBdf2(detail::Validated{}, gamma); }};
+  }
+  static SettingsError validate(Scalar gamma) {
+    if (!(gamma > 0 && gamma < 1)) return detail::invalid("mjukf::ExplicitTrBdf2", "gamma", "must lie in (0, 1)");
+    return {};
   }
 
   template <class F, class State>
@@ -53,6 +62,13 @@ class ExplicitTrBdf2 {
   Scalar gamma() const { return gamma_; }
 
  private:
+  ExplicitTrBdf2(detail::Validated, Scalar gamma) : gamma_(gamma) {
+    const Scalar bdf2 = gamma * (Scalar(2) - gamma);  // γ(2 − γ)
+    currentWeight_ = Scalar(1) / bdf2;
+    previousWeight_ = -(Scalar(1) - gamma) * (Scalar(1) - gamma) / bdf2;
+    slopeWeight_ = (Scalar(1) - gamma) / (Scalar(2) - gamma);
+  }
+
   Scalar gamma_;
   Scalar currentWeight_;   // 1 / (γ(2−γ))
   Scalar previousWeight_;  // −(1−γ)² / (γ(2−γ))

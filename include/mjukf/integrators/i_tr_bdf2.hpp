@@ -6,6 +6,8 @@
 #include <cmath>
 
 #include "mjukf/detail/validation.hpp"
+#include "mjukf/result.hpp"
+#include "mjukf/settings_error.hpp"
 
 namespace mjukf {
 
@@ -23,13 +25,21 @@ class ITrBdf2 {
   static constexpr int order = 1;
   static constexpr int evaluationsPerStep = 3;
 
-  /// `gamma` is the fraction of the step taken by the trapezoidal stage, in (0, 1).
-  explicit ITrBdf2(Scalar gamma = Scalar(0.5)) : gamma_(gamma) {
-    if (!(gamma > 0 && gamma < 1)) detail::throwInvalid("mjukf::ITrBdf2", "gamma", "must lie in (0, 1)");
-    const Scalar bdf2 = gamma * (Scalar(2) - gamma);  // γ(2 − γ)
-    currentWeight_ = Scalar(1) / bdf2;
-    previousWeight_ = -(Scalar(1) - gamma) * (Scalar(1) - gamma) / bdf2;
-    slopeWeight_ = (Scalar(1) - gamma) / (Scalar(2) - gamma);
+  /// γ = 1/2, the paper's choice.
+  ITrBdf2() : ITrBdf2(detail::Validated{}, Scalar(0.5)) {}
+#if MJUKF_EXCEPTIONS
+  /// `gamma` is the fraction of the step taken by the trapezoidal stage, in (0, 1); throws
+  /// std::invalid_argument naming it otherwise. Without exceptions, use `create`.
+  explicit ITrBdf2(Scalar gamma) : ITrBdf2(detail::throwIfInvalid(validate(gamma)), gamma) {}
+#endif
+  /// The stepper, or the SettingsError naming `gamma` when it is not in (0, 1).
+  static Result<ITrBdf2> create(Scalar gamma) {
+    if (SettingsError e = validate(gamma)) return e;
+    return {detail::BuildWith{}, [&] { return ITrBdf2(detail::Validated{}, gamma); }};
+  }
+  static SettingsError validate(Scalar gamma) {
+    if (!(gamma > 0 && gamma < 1)) return detail::invalid("mjukf::ITrBdf2", "gamma", "must lie in (0, 1)");
+    return {};
   }
 
   template <class F, class State>
@@ -48,6 +58,13 @@ class ITrBdf2 {
   Scalar gamma() const { return gamma_; }
 
  private:
+  ITrBdf2(detail::Validated, Scalar gamma) : gamma_(gamma) {
+    const Scalar bdf2 = gamma * (Scalar(2) - gamma);  // γ(2 − γ)
+    currentWeight_ = Scalar(1) / bdf2;
+    previousWeight_ = -(Scalar(1) - gamma) * (Scalar(1) - gamma) / bdf2;
+    slopeWeight_ = (Scalar(1) - gamma) / (Scalar(2) - gamma);
+  }
+
   Scalar gamma_;
   Scalar currentWeight_;   // 1 / (γ(2−γ))
   Scalar previousWeight_;  // −(1−γ)² / (γ(2−γ))

@@ -12,6 +12,8 @@
 #include <Eigen/LU>
 
 #include "mjukf/detail/validation.hpp"
+#include "mjukf/result.hpp"
+#include "mjukf/settings_error.hpp"
 
 namespace mjukf {
 
@@ -96,10 +98,23 @@ class TrBdf2 {
   /// iteration of each stage. `tryStep` reports the count; docs/integrators.md has measured means.
   static constexpr int evaluationsPerStep = -1;
 
-  explicit TrBdf2(const TrBdf2Settings<Scalar>& settings = TrBdf2Settings<Scalar>()) : settings_(settings) {
+  /// The default settings, which are valid.
+  TrBdf2() : settings_() {}
+#if MJUKF_EXCEPTIONS
+  /// Throws std::invalid_argument naming the setting when one is invalid (`validate`). Without
+  /// exceptions, use `create`.
+  explicit TrBdf2(const TrBdf2Settings<Scalar>& settings) : TrBdf2(detail::throwIfInvalid(validate(settings)), settings) {}
+#endif
+  /// The stepper, or the SettingsError naming the first invalid setting.
+  static Result<TrBdf2> create(const TrBdf2Settings<Scalar>& settings) {
+    if (SettingsError e = validate(settings)) return e;
+    return {detail::BuildWith{}, [&] { return TrBdf2(detail::Validated{}, settings); }};
+  }
+  static SettingsError validate(const TrBdf2Settings<Scalar>& settings) {
     if (!(settings.tolerance > 0) || !std::isfinite(settings.tolerance))
-      detail::throwInvalid("mjukf::TrBdf2", "tolerance", "must be finite and positive");
-    if (settings.maxIterations < 1) detail::throwInvalid("mjukf::TrBdf2", "maxIterations", "must be at least 1");
+      return detail::invalid("mjukf::TrBdf2", "tolerance", "must be finite and positive");
+    if (settings.maxIterations < 1) return detail::invalid("mjukf::TrBdf2", "maxIterations", "must be at least 1");
+    return {};
   }
 
   /// γ = 2 − √2, the L-stable choice with equal stage coefficients.
@@ -148,6 +163,7 @@ class TrBdf2 {
   }
 
  private:
+  TrBdf2(detail::Validated, const TrBdf2Settings<Scalar>& settings) : settings_(settings) {}
   template <class State>
   static State failed(TrBdf2Report& report) {
     report.converged = false;
