@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # Sets up, builds and runs every test: bash scripts/test.sh [build-dir]
 #   1. Release build of everything with g++ (CMake preset `release`) and its whole test suite;
-#   2. the same suite built with clang, AddressSanitizer and UndefinedBehaviorSanitizer (preset
+#   2. the firmware example built for a Cortex-M4F and run under QEMU, its estimates compared with the
+#      host's (scripts/embedded.sh, docs/embedded.md); MJUKF_SKIP_EMBEDDED=1 skips it;
+#   3. the same suite built with clang, AddressSanitizer and UndefinedBehaviorSanitizer (preset
 #      `asan-ubsan`, in <build-dir>-asan), then the libFuzzer target of that build on the inputs that
 #      once failed and a short smoke run (docs/robustness.md records the long run).
-# MJUKF_SKIP_SANITIZERS=1 runs step 1 only.
+# MJUKF_SKIP_SANITIZERS=1 skips step 3.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
@@ -14,6 +16,8 @@ jobs=$(nproc)
 cmake --preset release -B "$build"
 cmake --build "$build" -j "$jobs"
 ctest --test-dir "$build" --output-on-failure -j "$jobs"
+
+[ "${MJUKF_SKIP_EMBEDDED:-0}" = 1 ] || bash scripts/embedded.sh "$build"
 
 [ "${MJUKF_SKIP_SANITIZERS:-0}" = 1 ] && exit 0
 

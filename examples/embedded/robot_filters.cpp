@@ -141,10 +141,6 @@ struct Figures {
   std::uint32_t stackHighWater = 0;
 };
 
-std::uint32_t elapsedSince(std::uint32_t start) {
-  return (embedded::ticks() - start) & ((1u << embedded::tickBits) - 1u);
-}
-
 // What runSchedule drives: the filter, with the clock and the stack paint around each step. A
 // measurement step is the time update and the measurement update (the plant's simulation between them,
 // in measurementAt, is not counted).
@@ -159,7 +155,7 @@ struct Measured {
     embedded::paintStack(kStackPaintDepth);
     const std::uint32_t start = embedded::ticks();
     const mjukf::Status status = step();
-    total += elapsedSince(start);
+    total += (embedded::ticks() - start) & ((1u << embedded::tickBits) - 1u);
     const std::uint32_t used = embedded::stackUsedSincePaint();
     if (used > figures.stackHighWater) figures.stackHighWater = used;
     return status;
@@ -188,10 +184,6 @@ void printEstimate(const char* name, long row, const Filter& filter) {
   line.write();
 }
 
-void printError(const mjukf::SettingsError& e) {
-  Line().text("settings error: ").text(e.owner).text(": setting '").text(e.setting).text("' ").text(e.reason).write();
-}
-
 // Builds the filter from `settings` by its factory, refuses a broken copy of them first, runs it and
 // prints what it did. True when everything went as expected.
 template <class Scalar, class Filter, class Settings>
@@ -207,7 +199,8 @@ bool runFilter(const char* name, const typename Filter::Param& initialParameters
 
   auto made = Filter::create(Model(), Experiment::initialState(), initialParameters, settings);
   if (!made) {
-    printError(made.error());
+    const mjukf::SettingsError& e = made.error();
+    Line().text("settings error: ").text(e.owner).text(": setting '").text(e.setting).text("' ").text(e.reason).write();
     return false;
   }
   Filter& filter = *made;

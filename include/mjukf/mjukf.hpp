@@ -13,6 +13,8 @@
 #include "mjukf/models/coupled_tank.hpp"
 #include "mjukf/models/flexible_joint.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
+#include "mjukf/result.hpp"
+#include "mjukf/settings_error.hpp"
 #include "mjukf/sigma_points.hpp"
 #include "mjukf/simulation.hpp"
 #include "mjukf/status.hpp"

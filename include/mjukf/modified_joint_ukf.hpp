@@ -13,7 +13,6 @@
 #include "mjukf/filter_settings.hpp"
 #include "mjukf/model.hpp"
 #include "mjukf/parameter_bounds.hpp"
-#include "mjukf/result.hpp"
 #include "mjukf/settings_error.hpp"
 
 namespace mjukf {
@@ -73,23 +72,12 @@ class ModifiedJointUkf
 
 #if MJUKF_EXCEPTIONS
   /// Throws std::invalid_argument naming the setting when a setting or the initial values are invalid
-  /// (`validate`). Without exceptions, use `create`.
+  /// (`validate`). Without exceptions, build it with `create` (detail/unscented_engine.hpp).
   ModifiedJointUkf(const Model_& model, const State& initialState, const Param& initialParameters,
                    const Settings& settings, const Integrator_& integrator = Integrator_())
       : ModifiedJointUkf(detail::throwIfInvalid(validate(initialState, initialParameters, settings)), model,
                          initialState, initialParameters, settings, integrator) {}
 #endif
-  /// The filter, or the SettingsError naming the first invalid setting or initial value: the way to
-  /// build one without exceptions (docs/embedded.md).
-  static Result<ModifiedJointUkf> create(const Model_& model, const State& initialState,
-                                         const Param& initialParameters, const Settings& settings,
-                                         const Integrator_& integrator = Integrator_()) {
-    if (SettingsError e = validate(initialState, initialParameters, settings)) return e;
-    return {detail::BuildWith{}, [&] {
-              return ModifiedJointUkf(detail::Validated{}, model, initialState, initialParameters, settings,
-                                      integrator);
-            }};
-  }
   /// The first invalid initial value or setting, or none: what the constructor would throw.
   static SettingsError validate(const State& initialState, const Param& initialParameters, const Settings& settings) {
     if (SettingsError e = detail::checkInitialValues(kOwner, initialState, initialParameters, settings.parameterBounds))

@@ -78,4 +78,15 @@ class Result {
   };
 };
 
+namespace detail {
+
+// What a create() returns: `error`, or the T that `make()` returns, built in place. `make` is a lambda
+// of the class, so it may call its private constructor.
+template <class T, class Make>
+Result<T> resultOf(const SettingsError& error, Make&& make) {
+  if (error) return error;
+  return {BuildWith{}, std::forward<Make>(make)};
+}
+
+}  // namespace detail
 }  // namespace mjukf

@@ -51,8 +51,8 @@ class MerweScaledSigmaPoints {
 #endif
   /// The points of `parameters`, or the SettingsError naming the invalid one.
   static Result<MerweScaledSigmaPoints> create(const SigmaPointParameters<Scalar>& parameters) {
-    if (SettingsError e = validate(parameters)) return e;
-    return {detail::BuildWith{}, [&] { return MerweScaledSigmaPoints(detail::Validated{}, parameters); }};
+    return detail::resultOf<MerweScaledSigmaPoints>(
+        validate(parameters), [&] { return MerweScaledSigmaPoints(detail::Validated{}, parameters); });
   }
   /// The error of the first invalid parameter (α ≤ 0, a value not finite, or L + λ ≤ 0), or none.
   static SettingsError validate(const SigmaPointParameters<Scalar>& parameters) {

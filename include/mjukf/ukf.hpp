@@ -10,7 +10,6 @@
 #include "mjukf/detail/validation.hpp"
 #include "mjukf/filter_settings.hpp"
 #include "mjukf/model.hpp"
-#include "mjukf/result.hpp"
 #include "mjukf/settings_error.hpp"
 
 namespace mjukf {
@@ -44,20 +43,12 @@ class Ukf : public detail::UnscentedEngine<Ukf<Model_, Integrator_>, Model_, Int
 
 #if MJUKF_EXCEPTIONS
   /// Throws std::invalid_argument naming the setting when a setting or the initial values are invalid
-  /// (`validate`). Without exceptions, use `create`.
+  /// (`validate`). Without exceptions, build it with `create` (detail/unscented_engine.hpp).
   Ukf(const Model_& model, const State& initialState, const Param& parameters, const Settings& settings,
       const Integrator_& integrator = Integrator_())
       : Ukf(detail::throwIfInvalid(validate(initialState, parameters, settings)), model, initialState, parameters,
             settings, integrator) {}
 #endif
-  /// The filter, or the SettingsError naming the first invalid setting or initial value: the way to
-  /// build one without exceptions (docs/embedded.md).
-  static Result<Ukf> create(const Model_& model, const State& initialState, const Param& parameters,
-                            const Settings& settings, const Integrator_& integrator = Integrator_()) {
-    if (SettingsError e = validate(initialState, parameters, settings)) return e;
-    return {detail::BuildWith{},
-            [&] { return Ukf(detail::Validated{}, model, initialState, parameters, settings, integrator); }};
-  }
   /// The first invalid initial value or setting, or none: what the constructor would throw.
   static SettingsError validate(const State& initialState, const Param& parameters, const Settings& settings) {
     if (SettingsError e = detail::requireFinite(kOwner, "initialState", initialState)) return e;

@@ -23,6 +23,7 @@
 #include "mjukf/detail/validation.hpp"
 #include "mjukf/filter_settings.hpp"
 #include "mjukf/model.hpp"
+#include "mjukf/result.hpp"
 #include "mjukf/settings_error.hpp"
 #include "mjukf/status.hpp"
 
@@ -92,6 +93,17 @@ class UnscentedEngine {
   /// others, NaN included, are ignored): exactly the update of the model reduced to those components,
   /// with R reduced likewise. A mask with nothing present leaves the estimate as it was.
   Status measurementUpdate(const Meas& y, const MeasurementMask<MeasDim>& present) { return self().update(y, &present); }
+
+  /// The filter built from these initial values and settings, or the SettingsError naming the first
+  /// invalid one (Filter::validate): the way to build a filter without exceptions (docs/embedded.md).
+  /// The filter is built once, in place in the Result (result.hpp). For Ukf, `initialParameters` are
+  /// its fixed parameters.
+  static Result<Filter> create(const Model& model, const State& initialState, const Param& initialParameters,
+                               const Settings& settings, const Integrator& integrator = Integrator()) {
+    return resultOf<Filter>(Filter::validate(initialState, initialParameters, settings), [&] {
+      return Filter(Validated{}, model, initialState, initialParameters, settings, integrator);
+    });
+  }
 
   /// Innovation, its covariance and the NIS of the last successful measurement update.
   const Diagnostics& lastUpdate() const { return core_.diagnostics(); }

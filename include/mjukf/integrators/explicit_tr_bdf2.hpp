@@ -4,6 +4,7 @@
 /// An explicit, second-order TR-BDF2: I-TR-BDF2's stages fed the plain predictor slopes.
 
 #include "mjukf/detail/validation.hpp"
+#include "mjukf/integrators/tr_bdf2_weights.hpp"
 #include "mjukf/result.hpp"
 #include "mjukf/settings_error.hpp"
 
@@ -41,38 +42,26 @@ class ExplicitTrBdf2 {
 #endif
   /// The stepper, or the SettingsError naming `gamma` when it is not in (0, 1).
   static Result<ExplicitTrBdf2> create(Scalar gamma) {
-    if (SettingsError e = validate(gamma)) return e;
-    return {detail::BuildWith{}, [&] { return ExplicitTrBdf2(detail::Validated{}, gamma); }};
+    return detail::resultOf<ExplicitTrBdf2>(validate(gamma), [&] { return ExplicitTrBdf2(detail::Validated{}, gamma); });
   }
-  static SettingsError validate(Scalar gamma) {
-    if (!(gamma > 0 && gamma < 1)) return detail::invalid("mjukf::ExplicitTrBdf2", "gamma", "must lie in (0, 1)");
-    return {};
-  }
+  static SettingsError validate(Scalar gamma) { return detail::validateStageFraction("mjukf::ExplicitTrBdf2", gamma); }
 
   template <class F, class State>
   State step(F&& f, Scalar t, const State& x, Scalar h) const {
-    const Scalar gh = gamma_ * h;
+    const Scalar gh = weights_.gamma * h;
     const State k1 = f(t, x);
     const State k2 = f(t + gh, State(x + gh * k1));
     const State xGamma = x + (gh / Scalar(2)) * (k1 + k2);
     const State k3 = f(t + h, State(x + h * k1));
-    return currentWeight_ * xGamma + previousWeight_ * x + (slopeWeight_ * h) * k3;
+    return weights_.current * xGamma + weights_.previous * x + (weights_.slope * h) * k3;
   }
 
-  Scalar gamma() const { return gamma_; }
+  Scalar gamma() const { return weights_.gamma; }
 
  private:
-  ExplicitTrBdf2(detail::Validated, Scalar gamma) : gamma_(gamma) {
-    const Scalar bdf2 = gamma * (Scalar(2) - gamma);  // γ(2 − γ)
-    currentWeight_ = Scalar(1) / bdf2;
-    previousWeight_ = -(Scalar(1) - gamma) * (Scalar(1) - gamma) / bdf2;
-    slopeWeight_ = (Scalar(1) - gamma) / (Scalar(2) - gamma);
-  }
+  ExplicitTrBdf2(detail::Validated, Scalar gamma) : weights_(gamma) {}
 
-  Scalar gamma_;
-  Scalar currentWeight_;   // 1 / (γ(2−γ))
-  Scalar previousWeight_;  // −(1−γ)² / (γ(2−γ))
-  Scalar slopeWeight_;     // (1−γ) / (2−γ)
+  detail::Bdf2Weights<Scalar> weights_;
 };
 
 }  // namespace mjukf

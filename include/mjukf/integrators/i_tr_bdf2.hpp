@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "mjukf/detail/validation.hpp"
+#include "mjukf/integrators/tr_bdf2_weights.hpp"
 #include "mjukf/result.hpp"
 #include "mjukf/settings_error.hpp"
 
@@ -34,41 +35,29 @@ class ITrBdf2 {
 #endif
   /// The stepper, or the SettingsError naming `gamma` when it is not in (0, 1).
   static Result<ITrBdf2> create(Scalar gamma) {
-    if (SettingsError e = validate(gamma)) return e;
-    return {detail::BuildWith{}, [&] { return ITrBdf2(detail::Validated{}, gamma); }};
+    return detail::resultOf<ITrBdf2>(validate(gamma), [&] { return ITrBdf2(detail::Validated{}, gamma); });
   }
-  static SettingsError validate(Scalar gamma) {
-    if (!(gamma > 0 && gamma < 1)) return detail::invalid("mjukf::ITrBdf2", "gamma", "must lie in (0, 1)");
-    return {};
-  }
+  static SettingsError validate(Scalar gamma) { return detail::validateStageFraction("mjukf::ITrBdf2", gamma); }
 
   template <class F, class State>
   State step(F&& f, Scalar t, const State& x, Scalar h) const {
     const State fk = f(t, x);
-    const Scalar gh = gamma_ * h;
+    const Scalar gh = weights_.gamma * h;
     // Trapezoidal stage: f_γ = ½ [f(x + γh f_k, t + γh) + f_k],  x_γ = x + (γh/2)(f_k + f_γ).
     const State fGamma = Scalar(0.5) * (f(t + gh, State(x + gh * fk)) + fk);
     const State xGamma = x + (gh / Scalar(2)) * (fk + fGamma);
     // BDF2 stage: f_1 = ½ [f(x + h f_k, t + h) + f_k],
     // x_{k+1} = x_γ / (γ(2−γ)) − (1−γ)²/(γ(2−γ)) x_k + (1−γ)/(2−γ) h f_1.
     const State f1 = Scalar(0.5) * (f(t + h, State(x + h * fk)) + fk);
-    return currentWeight_ * xGamma + previousWeight_ * x + (slopeWeight_ * h) * f1;
+    return weights_.current * xGamma + weights_.previous * x + (weights_.slope * h) * f1;
   }
 
-  Scalar gamma() const { return gamma_; }
+  Scalar gamma() const { return weights_.gamma; }
 
  private:
-  ITrBdf2(detail::Validated, Scalar gamma) : gamma_(gamma) {
-    const Scalar bdf2 = gamma * (Scalar(2) - gamma);  // γ(2 − γ)
-    currentWeight_ = Scalar(1) / bdf2;
-    previousWeight_ = -(Scalar(1) - gamma) * (Scalar(1) - gamma) / bdf2;
-    slopeWeight_ = (Scalar(1) - gamma) / (Scalar(2) - gamma);
-  }
+  ITrBdf2(detail::Validated, Scalar gamma) : weights_(gamma) {}
 
-  Scalar gamma_;
-  Scalar currentWeight_;   // 1 / (γ(2−γ))
-  Scalar previousWeight_;  // −(1−γ)² / (γ(2−γ))
-  Scalar slopeWeight_;     // (1−γ) / (2−γ)
+  detail::Bdf2Weights<Scalar> weights_;
 };
 
 }  // namespace mjukf

@@ -107,8 +107,7 @@ class TrBdf2 {
 #endif
   /// The stepper, or the SettingsError naming the first invalid setting.
   static Result<TrBdf2> create(const TrBdf2Settings<Scalar>& settings) {
-    if (SettingsError e = validate(settings)) return e;
-    return {detail::BuildWith{}, [&] { return TrBdf2(detail::Validated{}, settings); }};
+    return detail::resultOf<TrBdf2>(validate(settings), [&] { return TrBdf2(detail::Validated{}, settings); });
   }
   static SettingsError validate(const TrBdf2Settings<Scalar>& settings) {
     if (!(settings.tolerance > 0) || !std::isfinite(settings.tolerance))
