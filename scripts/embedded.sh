@@ -39,7 +39,8 @@ run_firmware() {
 # No allocator, no operator new/delete, no exception machinery linked in (the --wrap counters excepted).
 check_symbols() {
   local found
-  found=$(arm-none-eabi-nm -C "$1" | awk '{ $1 = ""; if (NF > 2) $2 = ""; sub(/^ +/, "") } 1' |
+  # "<8 hex digits or spaces> <type> <name>": the name alone, spaces in it kept.
+  found=$(arm-none-eabi-nm -C "$1" | sed -E 's/^[0-9a-fA-F ]{8} [A-Za-z] //' |
     grep -E '^(malloc|_malloc_r|calloc|_calloc_r|realloc|_realloc_r|free|_free_r|operator new|operator delete|__cxa_allocate_exception|__cxa_throw|__gxx_personality_v0)\b' || true)
   if [ -n "$found" ]; then
     echo "error: $1 links heap or exception code:" >&2
@@ -63,7 +64,7 @@ compare_runs() {
     FNR == 1 { file++ }
     $1 != "est" { next }
     file == 1 && $2 == "f" { for (i = 5; i <= NF; i++) target[$3, $4, i] = decode($i); rows[$3, $4] = NF; next }
-    file == 2 && $2 == "f" { for (i = 5; i <= NF; i++) hostf[$3, $4, i] = decode($i); next }
+    file == 2 && $2 == "f" { for (i = 5; i <= NF; i++) hostf[$3, $4, i] = decode($i); hostrows[$3, $4] = 1; next }
     file == 2 && $2 == "d" { for (i = 5; i <= NF; i++) hostd[$3, $4, i] = decode($i); next }
     END {
       for (key in rows) {   # the scale of float rounding: largest |float - double| per filter and component
@@ -83,6 +84,7 @@ compare_runs() {
           compared++
         }
       }
+      for (key in hostrows) if (!(key in rows)) { split(key, k, SUBSEP); print "the target printed no row " k[2] " of " k[1]; bad++ }
       for (f in worst) printf "  %-6s largest |target - host| = %.2f of the tolerance\n", f, worst[f]
       if (!compared) { print "nothing compared"; exit 1 }
       printf "compared %d values: %s\n", compared, bad ? bad " outside the tolerance" : "all within the tolerance"
