@@ -52,12 +52,16 @@ class UnscentedEngine {
 
   /// Unscented time update (docs/algorithms.md §2) from t over `steps` steps of size h, with the
   /// model's input signal u(t) evaluated at every stage time (once per distinct stage time, shared by
-  /// all sigma points). The sigma points are drawn once at t and propagated through all steps; Q is
-  /// added once. Returns Ok or Repaired when the step was committed, otherwise a refusal.
+  /// all sigma points); a model without input (InputDim = 0) needs no `input(t)`. The sigma points are
+  /// drawn once at t and propagated through all steps; Q is added once. Returns Ok or Repaired when
+  /// the step was committed, otherwise a refusal.
   template <class M = Model>
   Status timeUpdate(Scalar t, Scalar h, int steps = 1) {
-    static_assert(hasInputSignal<M>, "this model has no input(t): pass the input, timeUpdate(t, h, u)");
-    return timeUpdateWith(SharedSignalInput<Model>(model_), t, h, steps);
+    static_assert(needsNoInputArgument<M>, "this model has no input(t): pass the input, timeUpdate(t, h, u)");
+    if constexpr (hasInputSignal<M>)
+      return timeUpdateWith(SharedSignalInput<Model>(model_), t, h, steps);
+    else
+      return timeUpdateWith(HeldInput<Model>{noInput_}, t, h, steps);
   }
 
   /// Unscented time update with the input u held constant over the steps (zero-order hold).
@@ -67,11 +71,15 @@ class UnscentedEngine {
   }
 
   /// Open-loop propagation of the mean alone (docs/algorithms.md §7), covariance unchanged: the
-  /// paper's schedule between measurements. Input from the model's signal u(t).
+  /// paper's schedule between measurements. Input from the model's signal u(t), or none when the model
+  /// has no input (InputDim = 0).
   template <class M = Model>
   Status propagateMean(Scalar t, Scalar h, int steps = 1) {
-    static_assert(hasInputSignal<M>, "this model has no input(t): pass the input, propagateMean(t, h, u)");
-    return propagateMeanWith(SignalInput<Model>{model_}, t, h, steps);
+    static_assert(needsNoInputArgument<M>, "this model has no input(t): pass the input, propagateMean(t, h, u)");
+    if constexpr (hasInputSignal<M>)
+      return propagateMeanWith(SignalInput<Model>{model_}, t, h, steps);
+    else
+      return propagateMeanWith(HeldInput<Model>{noInput_}, t, h, steps);
   }
 
   /// Open-loop propagation of the mean alone with the input u held constant over the steps.
@@ -211,6 +219,9 @@ class UnscentedEngine {
   Core core_;
 
  private:
+  // The input of a model without one (InputDim = 0): an empty vector, held over every step.
+  static inline const Input noInput_{};
+
   Filter& self() { return static_cast<Filter&>(*this); }
 };
 
