@@ -17,7 +17,7 @@
 namespace mjukf {
 
 /// The repair of a covariance that is not positive definite, applied to the P of every time and
-/// measurement update before it is committed (design.md, robustness.md).
+/// measurement update before it is committed (docs/design.md, docs/robustness.md).
 ///
 /// With s = the mean of |Pᵢᵢ|, attempt k = 0 … maxAttempts − 1 factors P + s·firstJitter·growthᵏ·I;
 /// the first that has a Cholesky factor is committed and the step returns `Status::Repaired`. When

@@ -1,7 +1,7 @@
 #pragma once
 
 /// \file
-/// The coupled-tank plant (paper eqs. 1–2, Table 1; plants.md).
+/// The coupled-tank plant (paper eqs. 1–2, Table 1; docs/plants.md §1).
 
 #include <cmath>
 

@@ -1,7 +1,7 @@
 #pragma once
 
 /// \file
-/// The single-link robot with a flexible joint (paper eqs. 3–5, Table 2; plants.md).
+/// The single-link robot with a flexible joint (paper eqs. 3–5, Table 2; docs/plants.md §2).
 
 #include <cmath>
 
@@ -43,7 +43,7 @@ struct FlexibleJoint {
   Scalar inputFrequency = Scalar(1);        ///< f of u(t) (Hz)
 
   /// The constants as printed in the paper's Table 2 (k = 0.18). The published results were not made
-  /// with these; see plants.md.
+  /// with these; see docs/plants.md §2.
   static FlexibleJoint paperTable2() {
     FlexibleJoint model;
     model.springStiffness = Scalar(0.18);
