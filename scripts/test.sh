@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Sets up, builds and runs every test: bash scripts/test.sh [build-dir]
-#   1. Release build of everything with g++ (CMake preset `release`) and its whole test suite;
+#   1. Release build of everything with g++ (CMake preset `release`) and its whole test suite, then
+#      the API reference (target mjukf_docs, doxygen warnings as errors);
 #   2. the same suite built with clang, AddressSanitizer and UndefinedBehaviorSanitizer (preset
 #      `asan-ubsan`, in <build-dir>-asan), then the libFuzzer target of that build on the inputs that
 #      once failed and a short smoke run (docs/robustness.md records the long run).
@@ -14,6 +15,9 @@ jobs=$(nproc)
 cmake --preset release -B "$build"
 cmake --build "$build" -j "$jobs"
 ctest --test-dir "$build" --output-on-failure -j "$jobs"
+
+# The API reference (docs/Doxyfile.in): any doxygen warning, undocumented public API included, fails.
+cmake --build "$build" --target mjukf_docs
 
 [ "${MJUKF_SKIP_SANITIZERS:-0}" = 1 ] && exit 0
 

@@ -32,6 +32,7 @@ struct CovarianceRepair {
   Scalar growth = Scalar(100);  ///< factor between attempts, ≥ 1
 };
 
+/// \cond INTERNAL
 namespace detail {
 
 template <class Scalar>
@@ -104,4 +105,5 @@ class CovarianceGuard {
 };
 
 }  // namespace detail
+/// \endcond
 }  // namespace mjukf

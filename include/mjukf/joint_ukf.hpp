@@ -19,7 +19,9 @@ namespace mjukf {
 template <class Model>
 struct JointUkfSettings : ParameterEstimationSettings<typename Model::Scalar, Model::StateDim + Model::ParamDim,
                                                       Model::MeasDim, Model::ParamDim> {
+  /// n + p, the dimension of the augmented vector [x; θ].
   static constexpr int AugmentedDim = Model::StateDim + Model::ParamDim;
+  /// The type of P₀ and Q of [x; θ].
   using AugmentedMatrix = Eigen::Matrix<typename Model::Scalar, AugmentedDim, AugmentedDim>;
 };
 
@@ -39,12 +41,19 @@ class JointUkf : public detail::UnscentedEngine<JointUkf<Model_, Integrator_>, M
   friend Engine;
 
  public:
+  /// The model's scalar and vector types (see the engine, detail/unscented_engine.hpp).
   using typename Engine::Param, typename Engine::Scalar, typename Engine::State;
+  /// The settings struct of this filter.
   using Settings = JointUkfSettings<Model_>;
+  /// n and p: the model's sizes.
   using Engine::StateDim, Engine::ParamDim;
+  /// n + p, the dimension of the augmented vector [x; θ].
   static constexpr int AugmentedDim = StateDim + ParamDim;
+  /// 2(n + p) + 1 sigma points.
   static constexpr int SigmaPointCount = 2 * AugmentedDim + 1;
+  /// The augmented vector [x; θ].
   using AugmentedState = Eigen::Matrix<Scalar, AugmentedDim, 1>;
+  /// The covariance of [x; θ].
   using AugmentedMatrix = Eigen::Matrix<Scalar, AugmentedDim, AugmentedDim>;
 
   /// Throws std::invalid_argument naming the setting when a setting or the initial values are invalid.
@@ -57,6 +66,7 @@ class JointUkf : public detail::UnscentedEngine<JointUkf<Model_, Integrator_>, M
   State state() const { return augmentedState().template head<StateDim>(); }
   /// The parameter block θ of the augmented mean.
   Param parameters() const { return augmentedState().template tail<ParamDim>(); }
+  /// The augmented mean [x̂; θ̂].
   const AugmentedState& augmentedState() const { return this->core_.mean(); }
   /// Covariance of the augmented vector [x; θ].
   const AugmentedMatrix& covariance() const { return this->core_.covariance(); }

@@ -46,6 +46,7 @@
 
 namespace mjukf {
 
+/// \cond INTERNAL
 namespace detail {
 
 template <class T, class = void>
@@ -95,6 +96,7 @@ template <class Scalar, int Rows>
 using Vector = Eigen::Matrix<Scalar, Rows, 1>;
 
 }  // namespace detail
+/// \endcond
 
 /// True when `Model` provides `input(t)`, a known input signal; filters then offer time updates that
 /// evaluate it at each stage time.
@@ -114,6 +116,7 @@ inline constexpr bool isDiscreteTime = detail::HasTransition<Model>::value;
 /// The integrator of a filter over a discrete-time model: none. It only marks the slot.
 template <class Scalar_>
 struct NoIntegrator {
+  /// The floating-point type.
   using Scalar = Scalar_;
 };
 

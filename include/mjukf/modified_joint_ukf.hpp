@@ -21,9 +21,13 @@ namespace mjukf {
 template <class Model>
 struct ModifiedJointUkfSettings
     : ParameterEstimationSettings<typename Model::Scalar, Model::StateDim, Model::MeasDim, Model::ParamDim> {
+  /// The model's floating-point type.
   using Scalar = typename Model::Scalar;
+  /// The type of P₀ and Q (n × n).
   using StateMatrix = Eigen::Matrix<Scalar, Model::StateDim, Model::StateDim>;
+  /// The parameter vector θ.
   using Param = typename Model::Param;
+  /// The type of T (p × m).
   using Transformation = Eigen::Matrix<Scalar, Model::ParamDim, Model::MeasDim>;
   /// ξ, the scaling parameter of eq. 9: with θᵢ ← θ̂ − ξ T (y − Yᵢ), a negative ξ moves a parameter up
   /// when the measurements it raises are above their prediction (docs/algorithms.md §5: the tank's
@@ -61,12 +65,19 @@ class ModifiedJointUkf
   friend Engine;
 
  public:
+  /// The model's scalar and vector types (see the engine, detail/unscented_engine.hpp).
   using typename Engine::Meas, typename Engine::Param, typename Engine::Scalar, typename Engine::State;
+  /// The settings struct of this filter.
   using Settings = ModifiedJointUkfSettings<Model_>;
+  /// n, p and m: the model's sizes.
   using Engine::StateDim, Engine::ParamDim, Engine::MeasDim;
+  /// 2n + 1 sigma points, each with its own parameter vector θᵢ.
   static constexpr int SigmaPointCount = 2 * StateDim + 1;
+  /// An n × n matrix: the state covariance.
   using StateMatrix = Eigen::Matrix<Scalar, StateDim, StateDim>;
+  /// T of eq. 9 (p × m).
   using Transformation = Eigen::Matrix<Scalar, ParamDim, MeasDim>;
+  /// The per-point parameter vectors θᵢ, one column per sigma point.
   using ParamPoints = Eigen::Matrix<Scalar, ParamDim, SigmaPointCount>;
 
   /// Throws std::invalid_argument naming the setting when a setting or the initial values are invalid.
@@ -77,7 +88,9 @@ class ModifiedJointUkf
     spreadParameters(initialParameters);
   }
 
+  /// The state estimate x̂.
   const State& state() const { return this->core_.mean(); }
+  /// The state covariance P (n × n).
   const StateMatrix& covariance() const { return this->core_.covariance(); }
   /// θ̂, the plain mean of the per-point parameters (eq. 10).
   const Param& parameters() const { return parameters_; }

@@ -16,6 +16,7 @@ namespace mjukf {
 /// Settings of `Ukf`, validated at construction: P₀ and Q of the state x.
 template <class Model>
 struct UkfSettings : UnscentedSettings<typename Model::Scalar, Model::StateDim, Model::MeasDim> {
+  /// The type of P₀ and Q (n × n).
   using StateMatrix = Eigen::Matrix<typename Model::Scalar, Model::StateDim, Model::StateDim>;
 };
 
@@ -35,9 +36,13 @@ class Ukf : public detail::UnscentedEngine<Ukf<Model_, Integrator_>, Model_, Int
   friend Engine;
 
  public:
+  /// The model's scalar and vector types (see the engine, detail/unscented_engine.hpp).
   using typename Engine::Param, typename Engine::Scalar, typename Engine::State;
+  /// The settings struct of this filter.
   using Settings = UkfSettings<Model_>;
+  /// An n × n matrix: the state covariance.
   using StateMatrix = Eigen::Matrix<Scalar, Engine::StateDim, Engine::StateDim>;
+  /// 2n + 1 sigma points.
   static constexpr int SigmaPointCount = 2 * Engine::StateDim + 1;
 
   /// Throws std::invalid_argument naming the setting when a setting or the initial values are invalid.
@@ -45,7 +50,9 @@ class Ukf : public detail::UnscentedEngine<Ukf<Model_, Integrator_>, Model_, Int
       const Integrator_& integrator = Integrator_())
       : Engine(kOwner, model, integrator, settings, checked(initialState, parameters)), parameters_(parameters) {}
 
+  /// The state estimate x̂.
   const State& state() const { return this->core_.mean(); }
+  /// The state covariance P (n × n).
   const StateMatrix& covariance() const { return this->core_.covariance(); }
   /// The fixed parameters the model is evaluated with.
   const Param& parameters() const { return parameters_; }

@@ -26,8 +26,11 @@ namespace mjukf {
 template <class Scalar_>
 class ExplicitTrBdf2 {
  public:
+  /// The floating-point type.
   using Scalar = Scalar_;
+  /// The order of convergence.
   static constexpr int order = 2;
+  /// Evaluations of f per step.
   static constexpr int evaluationsPerStep = 3;
 
   /// `gamma` is the fraction of the step taken by the trapezoidal stage, in (0, 1).
@@ -40,6 +43,7 @@ class ExplicitTrBdf2 {
     slopeWeight_ = (Scalar(1) - gamma) / (Scalar(2) - gamma);
   }
 
+  /// One step of size h from x at time t of ẋ = f(t, x); f is called as `f(Scalar t, const State& x)`.
   template <class F, class State>
   State step(F&& f, Scalar t, const State& x, Scalar h) const {
     const Scalar gh = gamma_ * h;
@@ -50,6 +54,7 @@ class ExplicitTrBdf2 {
     return currentWeight_ * xGamma + previousWeight_ * x + (slopeWeight_ * h) * k3;
   }
 
+  /// γ, the fraction of the step taken by the first stage.
   Scalar gamma() const { return gamma_; }
 
  private:

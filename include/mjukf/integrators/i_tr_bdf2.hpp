@@ -17,10 +17,12 @@ namespace mjukf {
 template <class Scalar_>
 class ITrBdf2 {
  public:
+  /// The floating-point type.
   using Scalar = Scalar_;
   /// Order of convergence the paper's variant is declared to reach (its averaged stage slopes keep a
   /// first-order error term; the cross-check against SUNDIALS measures it).
   static constexpr int order = 1;
+  /// Evaluations of f per step.
   static constexpr int evaluationsPerStep = 3;
 
   /// `gamma` is the fraction of the step taken by the trapezoidal stage, in (0, 1).
@@ -32,6 +34,7 @@ class ITrBdf2 {
     slopeWeight_ = (Scalar(1) - gamma) / (Scalar(2) - gamma);
   }
 
+  /// One step of size h from x at time t of ẋ = f(t, x); f is called as `f(Scalar t, const State& x)`.
   template <class F, class State>
   State step(F&& f, Scalar t, const State& x, Scalar h) const {
     const State fk = f(t, x);
@@ -45,6 +48,7 @@ class ITrBdf2 {
     return currentWeight_ * xGamma + previousWeight_ * x + (slopeWeight_ * h) * f1;
   }
 
+  /// γ, the fraction of the step taken by the first stage.
   Scalar gamma() const { return gamma_; }
 
  private:

@@ -23,14 +23,23 @@ namespace mjukf::models {
 /// h = 0.3 m), which produced the paper's tables; `paperTable2()` has Table 2's k = 0.18.
 template <class Scalar_ = double>
 struct FlexibleJoint {
+  /// The floating-point type.
   using Scalar = Scalar_;
+  /// n = 4: motor and link angles and speeds.
   static constexpr int StateDim = 4;
+  /// p = 2: K_τ and m.
   static constexpr int ParamDim = 2;
+  /// m = 4: the whole state is measured.
   static constexpr int MeasDim = 4;
+  /// One input: the motor voltage.
   static constexpr int InputDim = 1;
+  /// x = (θ_m, ω_m, θ_l, ω_l) in rad and rad/s.
   using State = Eigen::Matrix<Scalar, StateDim, 1>;
+  /// θ = (K_τ, m) in N m/V and kg.
   using Param = Eigen::Matrix<Scalar, ParamDim, 1>;
+  /// y = x.
   using Meas = Eigen::Matrix<Scalar, MeasDim, 1>;
+  /// u = (motor voltage) in V.
   using Input = Eigen::Matrix<Scalar, InputDim, 1>;
 
   Scalar motorInertia = Scalar(3.7e-3);     ///< J_m (kg m²)
