@@ -69,6 +69,9 @@ struct DualUkfSettings
 /// with no time update before it measures the θⱼ at the current x̂. Parameter bounds clamp θ̂ after
 /// each correction. Every matrix is sized at compile time and no per-step call allocates; a call that
 /// returns a Status other than Ok or Repaired leaves the filter exactly as it was.
+///
+/// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
+/// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>>
 class DualUkf : public detail::UnscentedEngine<DualUkf<Model_, Integrator_>, Model_, Integrator_,
                                                DualUkfSettings<Model_>, Model_::StateDim> {

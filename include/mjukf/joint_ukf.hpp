@@ -32,6 +32,9 @@ struct JointUkfSettings : ParameterEstimationSettings<typename Model::Scalar, Mo
 /// Status other than Ok or Repaired leaves the filter exactly as it was. The per-step calls are those
 /// of the shared engine, detail/unscented_engine.hpp; with parameter bounds, the θ block of every
 /// committed mean is clamped (parameter_bounds.hpp).
+///
+/// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
+/// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>>
 class JointUkf : public detail::UnscentedEngine<JointUkf<Model_, Integrator_>, Model_, Integrator_,
                                                 JointUkfSettings<Model_>, Model_::StateDim + Model_::ParamDim> {

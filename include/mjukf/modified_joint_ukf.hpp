@@ -55,6 +55,9 @@ struct ModifiedJointUkfSettings
 /// with Yᵢ = g(χᵢ⁺, θᵢ) and θ̂ the estimate before this update. A masked update reduces T to the columns
 /// present, each row rescaled to sum to 1 again (eq. 14); a row with no weight on any present
 /// component leaves its parameter at θ̂.
+///
+/// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
+/// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>>
 class ModifiedJointUkf
     : public detail::UnscentedEngine<ModifiedJointUkf<Model_, Integrator_>, Model_, Integrator_,

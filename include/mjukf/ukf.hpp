@@ -27,6 +27,9 @@ struct UkfSettings : UnscentedSettings<typename Model::Scalar, Model::StateDim, 
 /// allocates. A call that returns a Status other than Ok or Repaired leaves the filter exactly as it
 /// was. The per-step calls (`timeUpdate`, `propagateMean`, `measurementUpdate`) are those of the shared
 /// engine, detail/unscented_engine.hpp.
+///
+/// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
+/// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>>
 class Ukf : public detail::UnscentedEngine<Ukf<Model_, Integrator_>, Model_, Integrator_, UkfSettings<Model_>,
                                            Model_::StateDim> {
