@@ -38,7 +38,7 @@ while IFS= read -r file; do
       grep -qP "^#{2,}\s+$section\.(\s|$)" "$target" ||
         complain "$file:$line" "cites $path §$section, but $target has no heading '## $section.'"
     done
-  done < <(grep -noP "$citation" "$file" || true)
+  done < <(grep -noP "$citation" "$file" | awk '!seen[$0]++' || true)
 done < <(grep -rIl --exclude-dir=.git -P '\.md' "${scan[@]}" | sort)
 
 [ "$status" = 0 ] && echo "citations: every cited document and section exists"
