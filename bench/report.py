@@ -11,7 +11,7 @@ import os
 import subprocess
 import sys
 
-# The published reference scripts' whole-run times (experiments.md), in seconds.
+# The published reference scripts' whole-run times (docs/plants.md §6), in seconds.
 REFERENCE_S = {
     ("flexible_joint", "mjukf"): 1.06,
     ("flexible_joint", "jukf"): 1.56,
@@ -190,7 +190,7 @@ def main():
     w("")
     w("`run/<plant>/<filter>`: the reference measurement file (robot 20 s, tank 200 s, h = 1 ms) with the")
     w("paper's schedule and settings, RMSE accumulated as in the conformance test (the RMSE column shows the")
-    w("timed runs are the conformance runs). Reference: the published Python scripts' times (experiments.md);")
+    w("timed runs are the conformance runs). Reference: the published Python scripts' times (docs/plants.md §6);")
     w("the UKF knows the true parameters and has no reference script; neither has the dual UKF (library")
     w("settings; the paper runs no dual filter), whose RMSE is that of `estimate --filter dual`.")
     w("")

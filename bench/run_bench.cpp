@@ -1,5 +1,5 @@
 // run/<plant>/<filter>: a whole paper run over the reference measurement file (tank 200 s, robot 20 s,
-// h = 1 ms) with the paper's schedule (algorithms.md §7), accumulating the RMSE of the parameters as
+// h = 1 ms) with the paper's schedule (docs/algorithms.md §7), accumulating the RMSE of the parameters as
 // the conformance test does. The file is read once, outside the timed loop. Counters: rmse_theta1
 // (and rmse_theta2 on the robot), to show the timed runs are the conformance runs. <filter> is ukf,
 // jukf, mjukf (the paper's settings) or dual: the dual UKF with the library's settings

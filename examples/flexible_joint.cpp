@@ -31,7 +31,7 @@ struct FlexibleJointPlant {
   // Conformance RMSEs on the reference file; the reference scripts' times on a 2-core machine.
   static constexpr PaperNumbers<2> reference{{0.02671036066, 0.03426798571}, {0.006717243853, 0.008727060131}, 1.56,
                                              1.06};
-  // plants.md: at t = 5 s, K_τ becomes 0.10 and m 0.30; 30 s; MJUKF with ξ = −0.0035.
+  // docs/plants.md §3: at t = 5 s, K_τ becomes 0.10 and m 0.30; 30 s; MJUKF with ξ = −0.0035.
   static std::optional<ParameterChange<Param>> parameterChange() {
     return ParameterChange<Param>{5.0, 30.0, Param(0.10, 0.30), Experiment::parameterChangeScaling};
   }

@@ -2,8 +2,10 @@
 # Installs what mjukf needs to build, test and plot on Debian 12, when it is missing:
 # bash scripts/setup.sh [more packages…] (scripts/embedded.sh adds the ARM toolchain and QEMU).
 set -euo pipefail
-# clang and libclang-rt-14-dev: the libFuzzer target (-fsanitize=fuzzer) of scripts/test.sh.
-packages=(cmake g++ make xz-utils libeigen3-dev libsundials-dev libgtest-dev libbenchmark-dev gnuplot-nox clang libclang-rt-14-dev "$@")
+# clang and libclang-rt-14-dev: the libFuzzer target (-fsanitize=fuzzer) of scripts/test.sh; doxygen:
+# the API reference (target mjukf_docs).
+packages=(cmake g++ make xz-utils libeigen3-dev libsundials-dev libgtest-dev libbenchmark-dev gnuplot-nox clang libclang-rt-14-dev
+  doxygen "$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p")

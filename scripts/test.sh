@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Sets up, builds and runs every test: bash scripts/test.sh [build-dir]
-#   1. Release build of everything with g++ (CMake preset `release`) and its whole test suite;
+#   1. Release build of everything with g++ (CMake preset `release`) and its whole test suite, then
+#      the API reference (target mjukf_docs, doxygen warnings as errors);
 #   2. the firmware example built for a Cortex-M4F and run under QEMU, its estimates compared with the
 #      host's (scripts/embedded.sh, docs/embedded.md); MJUKF_SKIP_EMBEDDED=1 skips it;
 #   3. the same suite built with clang, AddressSanitizer and UndefinedBehaviorSanitizer (preset
@@ -16,6 +17,9 @@ jobs=$(nproc)
 cmake --preset release -B "$build"
 cmake --build "$build" -j "$jobs"
 ctest --test-dir "$build" --output-on-failure -j "$jobs"
+
+# The API reference (docs/Doxyfile.in): any doxygen warning, undocumented public API included, fails.
+cmake --build "$build" --target mjukf_docs
 
 [ "${MJUKF_SKIP_EMBEDDED:-0}" = 1 ] || bash scripts/embedded.sh "$build"
 

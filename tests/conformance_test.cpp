@@ -1,5 +1,5 @@
 // Conformance: JUKF and MJUKF driven with the paper's schedule and settings over the reference
-// measurement files give the RMSEs of the conformance table in experiments.md. Those numbers come
+// measurement files give the RMSEs of the conformance table of docs/plants.md §6. Those numbers come
 // from an independent implementation of the same spec in double precision; agreeing to 1e-6 relative
 // means both do the same thing (rounding differences alone stay orders of magnitude below that).
 

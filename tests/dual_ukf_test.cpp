@@ -1,4 +1,4 @@
-// DualUkf (algorithms.md §9) against results that do not come from its own code: the plain Ukf where
+// DualUkf (docs/algorithms.md §9) against results that do not come from its own code: the plain Ukf where
 // the dual filter must reduce to it, a textbook reconstruction of both filters' steps, the optimal
 // (augmented) Kalman filter of a linear-Gaussian joint problem, exact propagation counts, and the
 // paper's robot data.
@@ -390,7 +390,7 @@ TEST(DualUkf, PropagationCountsOfBothOrderings) {
   }
 }
 
-// The textbook dual UKF step, written out from algorithms.md §9 with the public pieces: the parameter
+// The textbook dual UKF step, written out from docs/algorithms.md §9 with the public pieces: the parameter
 // filter's time update P^θ⁻ = P^θ/λ + Q_θ, its points θⱼ of (θ̂, P^θ⁻), x̂_{k−1} propagated with each,
 // Dⱼ = g(·, θⱼ), and the unscented correction with R + parameterObservationNoise, by explicit inverse.
 template <class Model, class Stepper, class InputAt>

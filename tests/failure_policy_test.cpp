@@ -1,5 +1,5 @@
-// The failure policy (design.md): a refused step returns a Status other than Ok and leaves the filter
-// exactly as it was: estimate, covariance, parameters (and MJUKF's θᵢ), diagnostics, and the sigma
+// The failure policy (docs/design.md): a refused step returns a Status other than Ok and leaves
+// the filter exactly as it was: estimate, covariance, parameters (and MJUKF's θᵢ), diagnostics, and the sigma
 // points a following measurement update would use. The dual filter's parameter filter too: θ̂, P^θ,
 // its diagnostics, and the prior its UpdatedParameters ordering runs the time update again from.
 

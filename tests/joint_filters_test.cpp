@@ -1,4 +1,4 @@
-// JUKF (algorithms.md §4) and MJUKF (§5): model propagations per time update, and each filter checked
+// JUKF (docs/algorithms.md §4) and MJUKF (§5): model propagations per time update, and each filter checked
 // against an independent construction of the same step.
 
 #include <Eigen/LU>

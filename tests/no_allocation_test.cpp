@@ -1,5 +1,6 @@
 // No per-step call allocates: every filter on both plants, every kind of call, including refused ones;
-// the dual filter in both orderings; every filter over a discrete-time model; and reset().
+// the dual filter in both orderings; every filter over a discrete-time model and over a model without
+// input; and reset().
 // Two independent witnesses: Eigen's own runtime check (EIGEN_RUNTIME_NO_MALLOC makes any Eigen heap
 // allocation assert while it is forbidden) and a global operator new that counts every allocation.
 
@@ -19,6 +20,7 @@
 #include "mjukf/models/flexible_joint.hpp"
 #include "mjukf/paper/experiments.hpp"
 #include "mjukf/paper/schedule.hpp"
+#include "no_input_model.hpp"
 #include "robustness_support.hpp"
 #include "test_support.hpp"
 
@@ -225,6 +227,31 @@ TYPED_TEST(NoAllocation, Reset) {
   });
   EXPECT_EQ(count, 0) << "heap allocations in reset or the steps after it";
   for (int i = 0; i < 6; ++i) EXPECT_EQ(status[i], Status::Ok) << "call " << i;
+}
+
+// Every filter over a model without input (no_input_model.hpp): the calls without an input argument.
+template <class Filter>
+void expectNoAllocationWithoutInput() {
+  auto filter = mjukf::testing::no_input::makeFilter<Filter>();
+  const typename Filter::Meas y = Filter::Meas::Constant(0.5);
+  Status status[4];
+  const long count = allocationsDuring([&] {
+    status[0] = filter.timeUpdate(0.0, 0.01);
+    status[1] = filter.measurementUpdate(y);
+    status[2] = filter.propagateMean(0.01, 0.01);
+    status[3] = filter.timeUpdate(0.02, 0.01, 3);
+  });
+  EXPECT_EQ(count, 0) << "heap allocations in per-step calls without input";
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(status[i], Status::Ok) << "call " << i;
+}
+
+TEST(NoAllocation, CallsWithoutInput) {
+  using mjukf::testing::no_input::Pendulum;
+  using mjukf::testing::no_input::Rk4;
+  expectNoAllocationWithoutInput<mjukf::Ukf<Pendulum, Rk4>>();
+  expectNoAllocationWithoutInput<mjukf::JointUkf<Pendulum, Rk4>>();
+  expectNoAllocationWithoutInput<mjukf::ModifiedJointUkf<Pendulum, Rk4>>();
+  expectNoAllocationWithoutInput<mjukf::DualUkf<Pendulum, Rk4>>();
 }
 
 // The witnesses work: an allocation inside the window is seen by both.

@@ -1,4 +1,4 @@
-// The paper layer: the schedule (algorithms.md §7), which call happens at which row and where a
+// The paper layer: the schedule (docs/algorithms.md §7), which call happens at which row and where a
 // refused step stops the run; and the RMSE.
 
 #include <cmath>

@@ -1,4 +1,4 @@
-// Scaled sigma points (algorithms.md §1): weights, and the moments the points reproduce.
+// Scaled sigma points (docs/algorithms.md §1): weights, and the moments the points reproduce.
 
 #include <limits>
 #include <random>

@@ -1,7 +1,7 @@
 #pragma once
 
-// One filter run over a data set with the paper's schedule (algorithms.md §7): which filter, its
-// settings (the paper's by default, experiments.md; the library's for the dual UKF, which the paper
+// One filter run over a data set with the paper's schedule (docs/algorithms.md §7): which filter, its
+// settings (the paper's by default, docs/plants.md §5; the library's for the dual UKF, which the paper
 // does not run), and the estimates of every row.
 
 #include <chrono>

@@ -1,6 +1,6 @@
 #pragma once
 
-// Simulated measurements as the paper makes them (plants.md): the plant integrated with I-TR-BDF2 at
+// Simulated measurements as the paper makes them (docs/plants.md §4): the plant integrated with I-TR-BDF2 at
 // step h from x₀, then white Gaussian noise of one standard deviation for every channel,
 // σ = sqrt(var(all states) / 10^(SNR/10)), the variance taken over every channel and sample together.
 
@@ -42,7 +42,7 @@ struct SimulationOptions {
   TrueParameters<typename Model::Param> parameters{Model::trueParameters()};
 };
 
-/// The noise standard deviation for signal `states` at `snrDb` (plants.md).
+/// The noise standard deviation for signal `states` at `snrDb` (docs/plants.md §4).
 template <class State>
 double noiseStandardDeviation(const std::vector<State>& states, double snrDb) {
   double sum = 0;

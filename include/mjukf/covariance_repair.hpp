@@ -17,7 +17,7 @@
 namespace mjukf {
 
 /// The repair of a covariance that is not positive definite, applied to the P of every time and
-/// measurement update before it is committed (design.md, robustness.md).
+/// measurement update before it is committed (docs/design.md, docs/robustness.md).
 ///
 /// With s = the mean of |Pᵢᵢ|, attempt k = 0 … maxAttempts − 1 factors P + s·firstJitter·growthᵏ·I;
 /// the first that has a Cholesky factor is committed and the step returns `Status::Repaired`. When
@@ -32,6 +32,7 @@ struct CovarianceRepair {
   Scalar growth = Scalar(100);  ///< factor between attempts, ≥ 1
 };
 
+/// \cond INTERNAL
 namespace detail {
 
 template <class Scalar>
@@ -106,4 +107,5 @@ class CovarianceGuard {
 };
 
 }  // namespace detail
+/// \endcond
 }  // namespace mjukf

@@ -34,9 +34,13 @@ enum class DualUkfOrdering {
 template <class Model>
 struct DualUkfSettings
     : ParameterEstimationSettings<typename Model::Scalar, Model::StateDim, Model::MeasDim, Model::ParamDim> {
+  /// The model's floating-point type.
   using Scalar = typename Model::Scalar;
+  /// An n × n matrix, as P₀ and Q of the state filter.
   using StateMatrix = Eigen::Matrix<Scalar, Model::StateDim, Model::StateDim>;
+  /// A p × p matrix, as the parameter filter's covariances.
   using ParamMatrix = Eigen::Matrix<Scalar, Model::ParamDim, Model::ParamDim>;
+  /// An m × m matrix, as R.
   using MeasMatrix = Eigen::Matrix<Scalar, Model::MeasDim, Model::MeasDim>;
   /// α, β, κ of the parameter filter's sigma points (L = p).
   SigmaPointParameters<Scalar> parameterSigmaPoints;
@@ -51,6 +55,7 @@ struct DualUkfSettings
   /// λ ∈ (0, 1] of the parameter time update P^θ⁻ = P^θ / λ + Q_θ; 1 is none (van der Merwe's
   /// forgetting factor is the alternative to Q_θ).
   Scalar parameterForgetting = 1;
+  /// Whether the state's time update uses θ̂_{k−1} or the corrected θ̂_k (see DualUkfOrdering).
   DualUkfOrdering ordering = DualUkfOrdering::PriorParameters;
 };
 
@@ -65,6 +70,9 @@ struct DualUkfSettings
 /// with no time update before it measures the θⱼ at the current x̂. Parameter bounds clamp θ̂ after
 /// each correction. Every matrix is sized at compile time and no per-step call allocates; a call that
 /// returns a Status other than Ok or Repaired leaves the filter exactly as it was.
+///
+/// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
+/// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>>
 class DualUkf : public detail::UnscentedEngine<DualUkf<Model_, Integrator_>, Model_, Integrator_,
                                                DualUkfSettings<Model_>, Model_::StateDim> {
@@ -74,13 +82,18 @@ class DualUkf : public detail::UnscentedEngine<DualUkf<Model_, Integrator_>, Mod
   friend Engine;
 
  public:
+  /// The model's scalar and vector types (see the engine, detail/unscented_engine.hpp).
   using typename Engine::Input, typename Engine::Meas, typename Engine::Param, typename Engine::Scalar,
       typename Engine::State;
+  /// The settings struct of this filter.
   using Settings = DualUkfSettings<Model_>;
+  /// n, p and m: the model's sizes.
   using Engine::StateDim, Engine::ParamDim, Engine::MeasDim;
   static constexpr int SigmaPointCount = 2 * StateDim + 1;           ///< of the state filter
   static constexpr int ParameterSigmaPointCount = 2 * ParamDim + 1;  ///< of the parameter filter
+  /// An n × n matrix: the state filter's covariance.
   using StateMatrix = Eigen::Matrix<Scalar, StateDim, StateDim>;
+  /// A p × p matrix: the parameter filter's covariance.
   using ParamMatrix = Eigen::Matrix<Scalar, ParamDim, ParamDim>;
 
 #if MJUKF_EXCEPTIONS
@@ -110,7 +123,9 @@ class DualUkf : public detail::UnscentedEngine<DualUkf<Model_, Integrator_>, Mod
     return ParameterCore::SigmaPoints::validate(settings.parameterSigmaPoints);
   }
 
+  /// The state estimate x̂.
   const State& state() const { return this->core_.mean(); }
+  /// The state filter's covariance P (n × n).
   const StateMatrix& covariance() const { return this->core_.covariance(); }
   /// θ̂, the parameter filter's mean.
   const Param& parameters() const { return parameterCore_.mean(); }

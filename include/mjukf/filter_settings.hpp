@@ -18,8 +18,11 @@ namespace mjukf {
 /// `MeasDim` components. Validated when a filter is constructed.
 template <class Scalar_, int EstimateDim, int MeasDim>
 struct UnscentedSettings {
+  /// The floating-point type.
   using Scalar = Scalar_;
+  /// The type of P₀ and Q (the estimate's dimension squared).
   using CovarianceMatrix = Eigen::Matrix<Scalar, EstimateDim, EstimateDim>;
+  /// The type of R (m × m).
   using MeasMatrix = Eigen::Matrix<Scalar, MeasDim, MeasDim>;
 
   SigmaPointParameters<Scalar> sigmaPoints;                        ///< α, β, κ

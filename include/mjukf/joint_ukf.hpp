@@ -20,7 +20,9 @@ namespace mjukf {
 template <class Model>
 struct JointUkfSettings : ParameterEstimationSettings<typename Model::Scalar, Model::StateDim + Model::ParamDim,
                                                       Model::MeasDim, Model::ParamDim> {
+  /// n + p, the dimension of the augmented vector [x; θ].
   static constexpr int AugmentedDim = Model::StateDim + Model::ParamDim;
+  /// The type of P₀ and Q of [x; θ].
   using AugmentedMatrix = Eigen::Matrix<typename Model::Scalar, AugmentedDim, AugmentedDim>;
 };
 
@@ -31,6 +33,9 @@ struct JointUkfSettings : ParameterEstimationSettings<typename Model::Scalar, Mo
 /// Status other than Ok or Repaired leaves the filter exactly as it was. The per-step calls are those
 /// of the shared engine, detail/unscented_engine.hpp; with parameter bounds, the θ block of every
 /// committed mean is clamped (parameter_bounds.hpp).
+///
+/// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
+/// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>>
 class JointUkf : public detail::UnscentedEngine<JointUkf<Model_, Integrator_>, Model_, Integrator_,
                                                 JointUkfSettings<Model_>, Model_::StateDim + Model_::ParamDim> {
@@ -40,12 +45,19 @@ class JointUkf : public detail::UnscentedEngine<JointUkf<Model_, Integrator_>, M
   friend Engine;
 
  public:
+  /// The model's scalar and vector types (see the engine, detail/unscented_engine.hpp).
   using typename Engine::Param, typename Engine::Scalar, typename Engine::State;
+  /// The settings struct of this filter.
   using Settings = JointUkfSettings<Model_>;
+  /// n and p: the model's sizes.
   using Engine::StateDim, Engine::ParamDim;
+  /// n + p, the dimension of the augmented vector [x; θ].
   static constexpr int AugmentedDim = StateDim + ParamDim;
+  /// 2(n + p) + 1 sigma points.
   static constexpr int SigmaPointCount = 2 * AugmentedDim + 1;
+  /// The augmented vector [x; θ].
   using AugmentedState = Eigen::Matrix<Scalar, AugmentedDim, 1>;
+  /// The covariance of [x; θ].
   using AugmentedMatrix = Eigen::Matrix<Scalar, AugmentedDim, AugmentedDim>;
 
 #if MJUKF_EXCEPTIONS
@@ -67,6 +79,7 @@ class JointUkf : public detail::UnscentedEngine<JointUkf<Model_, Integrator_>, M
   State state() const { return augmentedState().template head<StateDim>(); }
   /// The parameter block θ of the augmented mean.
   Param parameters() const { return augmentedState().template tail<ParamDim>(); }
+  /// The augmented mean [x̂; θ̂].
   const AugmentedState& augmentedState() const { return this->core_.mean(); }
   /// Covariance of the augmented vector [x; θ].
   const AugmentedMatrix& covariance() const { return this->core_.covariance(); }

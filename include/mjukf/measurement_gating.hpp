@@ -53,6 +53,7 @@ inline double chiSquareQuantile(double probability, int dof) {
 /// with an R far below it (the paper's tank R = 1e-7) every measurement looks like an outlier.
 template <class Scalar, int MeasDim>
 struct MeasurementGate {
+  /// One threshold per measurement component.
   using Thresholds = Eigen::Matrix<Scalar, MeasDim, 1>;
   /// nisThreshold(k − 1) is the largest NIS accepted with k components present; +∞ accepts all.
   Thresholds nisThreshold = Thresholds::Constant(std::numeric_limits<Scalar>::infinity());
@@ -65,6 +66,7 @@ struct MeasurementGate {
   }
 };
 
+/// \cond INTERNAL
 namespace detail {
 
 template <class Scalar, int MeasDim>
@@ -84,4 +86,5 @@ bool presentComponentsFinite(const Meas& y, const Mask* present) {
 }
 
 }  // namespace detail
+/// \endcond
 }  // namespace mjukf

@@ -21,6 +21,10 @@
 /// };
 /// \endcode
 ///
+/// A model **without input** has `InputDim = 0` and needs no `input(t)`: `derivative` still receives
+/// the (empty) `Input`, and the filters' `timeUpdate(t, h)` and `propagateMean(t, h)` and `simulate`
+/// take no input argument.
+///
 /// A **discrete-time** model (the paper's eq. 6, x_k = F(x_{k−1}, u_{k−1}, θ_{k−1})) provides, instead
 /// of `derivative`, the next state over a step of length dt from time t, with the input at t:
 ///
@@ -42,6 +46,7 @@
 
 namespace mjukf {
 
+/// \cond INTERNAL
 namespace detail {
 
 template <class T, class = void>
@@ -91,11 +96,17 @@ template <class Scalar, int Rows>
 using Vector = Eigen::Matrix<Scalar, Rows, 1>;
 
 }  // namespace detail
+/// \endcond
 
 /// True when `Model` provides `input(t)`, a known input signal; filters then offer time updates that
 /// evaluate it at each stage time.
 template <class Model>
 inline constexpr bool hasInputSignal = detail::HasInputSignal<Model>::value;
+
+/// True when a filter's `timeUpdate(t, h)` and `propagateMean(t, h)` need no input argument: the model
+/// has its own signal `input(t)`, or no input at all (InputDim = 0, no `input(t)` needed).
+template <class Model>
+inline constexpr bool needsNoInputArgument = hasInputSignal<Model> || Model::InputDim == 0;
 
 /// True when `Model` is given in discrete time, by `transition` (the next state) rather than
 /// `derivative`.
@@ -105,6 +116,7 @@ inline constexpr bool isDiscreteTime = detail::HasTransition<Model>::value;
 /// The integrator of a filter over a discrete-time model: none. It only marks the slot.
 template <class Scalar_>
 struct NoIntegrator {
+  /// The floating-point type.
   using Scalar = Scalar_;
 };
 

@@ -22,9 +22,13 @@ namespace mjukf {
 template <class Model>
 struct ModifiedJointUkfSettings
     : ParameterEstimationSettings<typename Model::Scalar, Model::StateDim, Model::MeasDim, Model::ParamDim> {
+  /// The model's floating-point type.
   using Scalar = typename Model::Scalar;
+  /// The type of P₀ and Q (n × n).
   using StateMatrix = Eigen::Matrix<Scalar, Model::StateDim, Model::StateDim>;
+  /// The parameter vector θ.
   using Param = typename Model::Param;
+  /// The type of T (p × m).
   using Transformation = Eigen::Matrix<Scalar, Model::ParamDim, Model::MeasDim>;
   /// ξ, the scaling parameter of eq. 9: with θᵢ ← θ̂ − ξ T (y − Yᵢ), a negative ξ moves a parameter up
   /// when the measurements it raises are above their prediction (docs/algorithms.md §5: the tank's
@@ -52,6 +56,9 @@ struct ModifiedJointUkfSettings
 /// with Yᵢ = g(χᵢ⁺, θᵢ) and θ̂ the estimate before this update. A masked update reduces T to the columns
 /// present, each row rescaled to sum to 1 again (eq. 14); a row with no weight on any present
 /// component leaves its parameter at θ̂.
+///
+/// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
+/// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>>
 class ModifiedJointUkf
     : public detail::UnscentedEngine<ModifiedJointUkf<Model_, Integrator_>, Model_, Integrator_,
@@ -62,12 +69,19 @@ class ModifiedJointUkf
   friend Engine;
 
  public:
+  /// The model's scalar and vector types (see the engine, detail/unscented_engine.hpp).
   using typename Engine::Meas, typename Engine::Param, typename Engine::Scalar, typename Engine::State;
+  /// The settings struct of this filter.
   using Settings = ModifiedJointUkfSettings<Model_>;
+  /// n, p and m: the model's sizes.
   using Engine::StateDim, Engine::ParamDim, Engine::MeasDim;
+  /// 2n + 1 sigma points, each with its own parameter vector θᵢ.
   static constexpr int SigmaPointCount = 2 * StateDim + 1;
+  /// An n × n matrix: the state covariance.
   using StateMatrix = Eigen::Matrix<Scalar, StateDim, StateDim>;
+  /// T of eq. 9 (p × m).
   using Transformation = Eigen::Matrix<Scalar, ParamDim, MeasDim>;
+  /// The per-point parameter vectors θᵢ, one column per sigma point.
   using ParamPoints = Eigen::Matrix<Scalar, ParamDim, SigmaPointCount>;
 
 #if MJUKF_EXCEPTIONS
@@ -95,7 +109,9 @@ class ModifiedJointUkf
     return Engine::validateSettings(kOwner, settings);
   }
 
+  /// The state estimate x̂.
   const State& state() const { return this->core_.mean(); }
+  /// The state covariance P (n × n).
   const StateMatrix& covariance() const { return this->core_.covariance(); }
   /// θ̂, the plain mean of the per-point parameters (eq. 10).
   const Param& parameters() const { return parameters_; }

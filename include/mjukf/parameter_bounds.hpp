@@ -24,6 +24,7 @@ namespace mjukf {
 /// The initial parameters must lie in the box.
 template <class Scalar, int ParamDim>
 struct ParameterBounds {
+  /// The parameter vector θ.
   using Param = Eigen::Matrix<Scalar, ParamDim, 1>;
   Param lower = Param::Constant(-std::numeric_limits<Scalar>::infinity());  ///< no NaN
   Param upper = Param::Constant(std::numeric_limits<Scalar>::infinity());   ///< ≥ lower, no NaN
@@ -38,12 +39,14 @@ struct ParameterBounds {
   void clamp(Eigen::MatrixBase<Derived>&& theta) const {
     theta = theta.cwiseMax(lower).cwiseMin(upper);
   }
+  /// Clamps each component of θ into its bounds (components without bounds are left as they are).
   template <class Derived>
   void clamp(Eigen::MatrixBase<Derived>& theta) const {
     theta = theta.cwiseMax(lower).cwiseMin(upper);
   }
 };
 
+/// \cond INTERNAL
 namespace detail {
 
 // The bounds, and `initial` (named `initialName` in the message) within them.
@@ -72,4 +75,5 @@ SettingsError checkInitialValues(const char* owner, const State& initialState, c
 }
 
 }  // namespace detail
+/// \endcond
 }  // namespace mjukf

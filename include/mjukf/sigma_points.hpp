@@ -33,12 +33,19 @@ class MerweScaledSigmaPoints {
   static_assert(L > 0, "the dimension of the sigma points must be positive");
 
  public:
+  /// The floating-point type.
   using Scalar = Scalar_;
+  /// L, the dimension of the vector.
   static constexpr int Dim = L;
+  /// 2L + 1 points.
   static constexpr int Count = 2 * L + 1;
+  /// A vector of dimension L.
   using Vector = Eigen::Matrix<Scalar, L, 1>;
+  /// An L × L matrix.
   using Matrix = Eigen::Matrix<Scalar, L, L>;
+  /// The points, one per column.
   using Points = Eigen::Matrix<Scalar, L, Count>;
+  /// One weight per point.
   using Weights = Eigen::Matrix<Scalar, Count, 1>;
 
   /// The default parameters (α = 1, β = 2, κ = 0), which are valid for every L.
@@ -108,10 +115,15 @@ class MerweScaledSigmaPoints {
     return Status::Ok;
   }
 
+  /// The mean weights Wmᵢ (docs/algorithms.md §1).
   const Weights& meanWeights() const { return meanWeights_; }
+  /// The covariance weights Wcᵢ (docs/algorithms.md §1).
   const Weights& covarianceWeights() const { return covarianceWeights_; }
+  /// α, β, κ.
   const SigmaPointParameters<Scalar>& parameters() const { return parameters_; }
+  /// λ = α² (L + κ) − L.
   Scalar lambda() const { return lambda_; }
+  /// γ = √(L + λ), the scale of the points' spread.
   Scalar gamma() const { return gamma_; }
 
  private:

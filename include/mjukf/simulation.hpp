@@ -17,6 +17,7 @@
 
 namespace mjukf {
 
+/// \cond INTERNAL
 namespace detail {
 
 // An input source as stepModel takes it, made callable: a held value (any expression convertible to
@@ -49,6 +50,7 @@ auto defaultInputs(const Model& model) {
 }
 
 }  // namespace detail
+/// \endcond
 
 /// One integrator step of size h of `model` from the state x at time t under the parameters θ:
 /// x⁺ = Φ_h(x; t, θ), with ẋ = f(t, x, u(t), θ) = model.derivative(t, x, u, θ); for a discrete-time
@@ -95,6 +97,12 @@ typename Model::State stepModel(const Model& model, const Integrator& integrator
 /// the first with x₀ itself. The time of every step is computed from k, never accumulated, so a long
 /// run does not drift off its grid. Returns x_steps.
 ///
+/// \param model       the plant (model.hpp).
+/// \param integrator  the one-step integrator (`NoIntegrator` for a discrete-time model).
+/// \param x0          x₀, the state at t₀.
+/// \param t0          t₀, the time of x₀.
+/// \param h           the step size.
+/// \param steps       the number of steps; must not be negative.
 /// \param inputs      u over each step, as for stepModel: a held `Model::Input`, or a callable
 ///                    `Scalar t -> Model::Input` evaluated at every stage time.
 /// \param parameters  θ: a `Model::Param`, the same for every step, or a callable `long k -> Param`

@@ -17,6 +17,7 @@ namespace mjukf {
 /// Settings of `Ukf`, validated at construction: P₀ and Q of the state x.
 template <class Model>
 struct UkfSettings : UnscentedSettings<typename Model::Scalar, Model::StateDim, Model::MeasDim> {
+  /// The type of P₀ and Q (n × n).
   using StateMatrix = Eigen::Matrix<typename Model::Scalar, Model::StateDim, Model::StateDim>;
 };
 
@@ -27,6 +28,9 @@ struct UkfSettings : UnscentedSettings<typename Model::Scalar, Model::StateDim, 
 /// allocates. A call that returns a Status other than Ok or Repaired leaves the filter exactly as it
 /// was. The per-step calls (`timeUpdate`, `propagateMean`, `measurementUpdate`) are those of the shared
 /// engine, detail/unscented_engine.hpp.
+///
+/// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
+/// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>>
 class Ukf : public detail::UnscentedEngine<Ukf<Model_, Integrator_>, Model_, Integrator_, UkfSettings<Model_>,
                                            Model_::StateDim> {
@@ -36,9 +40,13 @@ class Ukf : public detail::UnscentedEngine<Ukf<Model_, Integrator_>, Model_, Int
   friend Engine;
 
  public:
+  /// The model's scalar and vector types (see the engine, detail/unscented_engine.hpp).
   using typename Engine::Param, typename Engine::Scalar, typename Engine::State;
+  /// The settings struct of this filter.
   using Settings = UkfSettings<Model_>;
+  /// An n × n matrix: the state covariance.
   using StateMatrix = Eigen::Matrix<Scalar, Engine::StateDim, Engine::StateDim>;
+  /// 2n + 1 sigma points.
   static constexpr int SigmaPointCount = 2 * Engine::StateDim + 1;
 
 #if MJUKF_EXCEPTIONS
@@ -56,7 +64,9 @@ class Ukf : public detail::UnscentedEngine<Ukf<Model_, Integrator_>, Model_, Int
     return Engine::validateSettings(kOwner, settings);
   }
 
+  /// The state estimate x̂.
   const State& state() const { return this->core_.mean(); }
+  /// The state covariance P (n × n).
   const StateMatrix& covariance() const { return this->core_.covariance(); }
   /// The fixed parameters the model is evaluated with.
   const Param& parameters() const { return parameters_; }

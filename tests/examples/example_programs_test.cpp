@@ -72,7 +72,7 @@ double printed(const std::string& output, const std::string& key) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// estimate on the reference files: the conformance RMSEs of experiments.md to 1e-6 relative.
+// estimate on the reference files: the conformance RMSEs of docs/plants.md §6 to 1e-6 relative.
 
 struct ConformanceCase {
   const char* name;
@@ -221,7 +221,7 @@ TEST(Simulate, WritesOneRowPerStepWithTruthAndThirtyDecibelNoise) {
   ASSERT_EQ(table.rows(), 2001u);
   EXPECT_NEAR(table.column("t")[1234], 1.234, 1e-12);
 
-  // plants.md: σ² = var(all states) / 10^(30/10), the same σ on every channel. The sample variance
+  // docs/plants.md §4: σ² = var(all states) / 10^(30/10), the same σ on every channel. The sample variance
   // of N = 4 × 2001 residuals y − x has relative standard error sqrt(2/N) ≈ 1.6 %, so 8 % is 5 of those.
   double sum = 0, squares = 0, noise = 0;
   const double n = 4.0 * double(table.rows());

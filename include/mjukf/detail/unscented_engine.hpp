@@ -32,34 +32,55 @@ namespace mjukf::detail {
 // The status of a step made of two parts that were both taken: Repaired if either was.
 constexpr Status combineTaken(Status a, Status b) { return a == Status::Ok ? b : a; }
 
+/// The per-step calls every filter shares: `Ukf`, `JointUkf`, `ModifiedJointUkf` and `DualUkf` derive
+/// from this engine and inherit its public members. Each call returns a Status; one other than Ok or
+/// Repaired leaves the filter exactly as it was (docs/robustness.md). `L` is the dimension of the
+/// vector the filter draws sigma points for.
 template <class Filter, class Model_, class Integrator_, class Settings_, int L>
 class UnscentedEngine {
   static_assert(!isDiscreteTime<Model_> || std::is_same_v<Integrator_, NoIntegrator<typename Model_::Scalar>>,
                 "a discrete-time model (it has transition()) is not integrated: leave the integrator out");
 
  public:
+  /// The model type (model.hpp).
   using Model = Model_;
+  /// The one-step integrator of a continuous model (`NoIntegrator` for a discrete-time one).
   using Integrator = Integrator_;
+  /// The filter's settings struct.
   using Settings = Settings_;
+  /// The model's floating-point type.
   using Scalar = typename Model::Scalar;
+  /// n, the dimension of the state x.
   static constexpr int StateDim = Model::StateDim;
+  /// p, the number of parameters θ.
   static constexpr int ParamDim = Model::ParamDim;
+  /// m, the dimension of the measurement y.
   static constexpr int MeasDim = Model::MeasDim;
+  /// The state vector x (n).
   using State = typename Model::State;
+  /// The parameter vector θ (p).
   using Param = typename Model::Param;
+  /// The measurement vector y (m).
   using Meas = typename Model::Meas;
+  /// The input vector u (empty for a model without input).
   using Input = typename Model::Input;
+  /// An m × m matrix, as R.
   using MeasMatrix = Eigen::Matrix<Scalar, MeasDim, MeasDim>;
+  /// What `lastUpdate()` returns (diagnostics.hpp).
   using Diagnostics = UpdateDiagnostics<Scalar, MeasDim>;
 
   /// Unscented time update (docs/algorithms.md §2) from t over `steps` steps of size h, with the
   /// model's input signal u(t) evaluated at every stage time (once per distinct stage time, shared by
-  /// all sigma points). The sigma points are drawn once at t and propagated through all steps; Q is
-  /// added once. Returns Ok or Repaired when the step was committed, otherwise a refusal.
+  /// all sigma points); a model without input (InputDim = 0) needs no `input(t)`. The sigma points are
+  /// drawn once at t and propagated through all steps; Q is added once. Returns Ok or Repaired when
+  /// the step was committed, otherwise a refusal.
   template <class M = Model>
   Status timeUpdate(Scalar t, Scalar h, int steps = 1) {
-    static_assert(hasInputSignal<M>, "this model has no input(t): pass the input, timeUpdate(t, h, u)");
-    return timeUpdateWith(SharedSignalInput<Model>(model_), t, h, steps);
+    static_assert(needsNoInputArgument<M>, "this model has no input(t): pass the input, timeUpdate(t, h, u)");
+    if constexpr (hasInputSignal<M>)
+      return timeUpdateWith(SharedSignalInput<Model>(model_), t, h, steps);
+    else
+      return timeUpdateWith(HeldInput<Model>{noInput_}, t, h, steps);
   }
 
   /// Unscented time update with the input u held constant over the steps (zero-order hold).
@@ -69,11 +90,15 @@ class UnscentedEngine {
   }
 
   /// Open-loop propagation of the mean alone (docs/algorithms.md §7), covariance unchanged: the
-  /// paper's schedule between measurements. Input from the model's signal u(t).
+  /// paper's schedule between measurements. Input from the model's signal u(t), or none when the model
+  /// has no input (InputDim = 0).
   template <class M = Model>
   Status propagateMean(Scalar t, Scalar h, int steps = 1) {
-    static_assert(hasInputSignal<M>, "this model has no input(t): pass the input, propagateMean(t, h, u)");
-    return propagateMeanWith(SignalInput<Model>{model_}, t, h, steps);
+    static_assert(needsNoInputArgument<M>, "this model has no input(t): pass the input, propagateMean(t, h, u)");
+    if constexpr (hasInputSignal<M>)
+      return propagateMeanWith(SignalInput<Model>{model_}, t, h, steps);
+    else
+      return propagateMeanWith(HeldInput<Model>{noInput_}, t, h, steps);
   }
 
   /// Open-loop propagation of the mean alone with the input u held constant over the steps.
@@ -109,10 +134,14 @@ class UnscentedEngine {
   const Diagnostics& lastUpdate() const { return core_.diagnostics(); }
   /// True when the sigma points of the last time update are still the filter's.
   bool hasPropagatedPoints() const { return core_.hasPoints(); }
+  /// The model the filter was built with.
   const Model& model() const { return model_; }
+  /// The integrator the filter was built with.
   const Integrator& integrator() const { return integrator_; }
+  /// The settings the filter was built with (validated at construction).
   const Settings& settings() const { return settings_; }
 
+  /// \cond INTERNAL
  protected:
   using Core = UnscentedCore<Scalar, L, MeasDim>;
   using Vector = typename Core::Vector;
@@ -231,7 +260,11 @@ class UnscentedEngine {
   Core core_;
 
  private:
+  // The input of a model without one (InputDim = 0): an empty vector, held over every step.
+  static inline const Input noInput_{};
+
   Filter& self() { return static_cast<Filter&>(*this); }
+  /// \endcond
 };
 
 }  // namespace mjukf::detail

@@ -29,8 +29,11 @@ namespace mjukf {
 template <class Scalar_>
 class ExplicitTrBdf2 {
  public:
+  /// The floating-point type.
   using Scalar = Scalar_;
+  /// The order of convergence.
   static constexpr int order = 2;
+  /// Evaluations of f per step.
   static constexpr int evaluationsPerStep = 3;
 
   /// γ = 1/2, the paper's choice.
@@ -46,6 +49,7 @@ class ExplicitTrBdf2 {
   }
   static SettingsError validate(Scalar gamma) { return detail::validateStageFraction("mjukf::ExplicitTrBdf2", gamma); }
 
+  /// One step of size h from x at time t of ẋ = f(t, x); f is called as `f(Scalar t, const State& x)`.
   template <class F, class State>
   State step(F&& f, Scalar t, const State& x, Scalar h) const {
     const Scalar gh = weights_.gamma * h;
@@ -56,6 +60,7 @@ class ExplicitTrBdf2 {
     return weights_.current * xGamma + weights_.previous * x + (weights_.slope * h) * k3;
   }
 
+  /// γ, the fraction of the step taken by the first stage.
   Scalar gamma() const { return weights_.gamma; }
 
  private:

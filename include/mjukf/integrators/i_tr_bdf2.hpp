@@ -20,10 +20,12 @@ namespace mjukf {
 template <class Scalar_>
 class ITrBdf2 {
  public:
+  /// The floating-point type.
   using Scalar = Scalar_;
   /// Order of convergence the paper's variant is declared to reach (its averaged stage slopes keep a
   /// first-order error term; the cross-check against SUNDIALS measures it).
   static constexpr int order = 1;
+  /// Evaluations of f per step.
   static constexpr int evaluationsPerStep = 3;
 
   /// γ = 1/2, the paper's choice.
@@ -39,6 +41,7 @@ class ITrBdf2 {
   }
   static SettingsError validate(Scalar gamma) { return detail::validateStageFraction("mjukf::ITrBdf2", gamma); }
 
+  /// One step of size h from x at time t of ẋ = f(t, x); f is called as `f(Scalar t, const State& x)`.
   template <class F, class State>
   State step(F&& f, Scalar t, const State& x, Scalar h) const {
     const State fk = f(t, x);
@@ -52,6 +55,7 @@ class ITrBdf2 {
     return weights_.current * xGamma + weights_.previous * x + (weights_.slope * h) * f1;
   }
 
+  /// γ, the fraction of the step taken by the first stage.
   Scalar gamma() const { return weights_.gamma; }
 
  private:

@@ -19,10 +19,14 @@ namespace mjukf {
 template <class Scalar_>
 class Rk4 {
  public:
+  /// The floating-point type.
   using Scalar = Scalar_;
+  /// The order of convergence.
   static constexpr int order = 4;
+  /// Evaluations of f per step.
   static constexpr int evaluationsPerStep = 4;
 
+  /// One step of size h from x at time t of ẋ = f(t, x); f is called as `f(Scalar t, const State& x)`.
   template <class F, class State>
   State step(F&& f, Scalar t, const State& x, Scalar h) const {
     const Scalar half = h / Scalar(2);

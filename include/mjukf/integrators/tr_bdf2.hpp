@@ -17,6 +17,7 @@
 
 namespace mjukf {
 
+/// \cond INTERNAL
 namespace detail {
 
 template <class F, class Scalar, class State, class = void>
@@ -28,17 +29,22 @@ struct HasJacobian<F, Scalar, State,
     : std::true_type {};
 
 }  // namespace detail
+/// \endcond
 
 /// A right-hand side `f(t, x)` bundled with its Jacobian `jacobian(t, x)` = ∂f/∂x, which TrBdf2 then
 /// uses instead of finite differences. Build one with `withJacobian(f, jacobian)`.
 template <class F, class J>
 struct RhsWithJacobian {
+  /// The right-hand side f(t, x).
   F rhs;
+  /// Its Jacobian ∂f/∂x(t, x).
   J jacobianOf;
+  /// f(t, x).
   template <class Scalar, class State>
   auto operator()(Scalar t, const State& x) const {
     return rhs(t, x);
   }
+  /// ∂f/∂x at (t, x).
   template <class Scalar, class State>
   auto jacobian(Scalar t, const State& x) const {
     return jacobianOf(t, x);
@@ -92,7 +98,9 @@ struct TrBdf2Report {
 template <class Scalar_>
 class TrBdf2 {
  public:
+  /// The floating-point type.
   using Scalar = Scalar_;
+  /// The order of convergence.
   static constexpr int order = 2;
   /// Not fixed: 1 + n (finite-difference Jacobian; 1 with a provided Jacobian) + one per Newton
   /// iteration of each stage. `tryStep` reports the count; docs/integrators.md has measured means.
@@ -109,6 +117,7 @@ class TrBdf2 {
   static Result<TrBdf2> create(const TrBdf2Settings<Scalar>& settings) {
     return detail::resultOf<TrBdf2>(validate(settings), [&] { return TrBdf2(detail::Validated{}, settings); });
   }
+  /// The first invalid setting (owner, setting, reason), or no error.
   static SettingsError validate(const TrBdf2Settings<Scalar>& settings) {
     if (!(settings.tolerance > 0) || !std::isfinite(settings.tolerance))
       return detail::invalid("mjukf::TrBdf2", "tolerance", "must be finite and positive");
@@ -118,6 +127,7 @@ class TrBdf2 {
 
   /// γ = 2 − √2, the L-stable choice with equal stage coefficients.
   static Scalar gamma() { return Scalar(2) - std::sqrt(Scalar(2)); }
+  /// The Newton settings.
   const TrBdf2Settings<Scalar>& settings() const { return settings_; }
 
   /// The state at t + h, or all NaN when Newton failed (see the class comment).

@@ -1,7 +1,7 @@
 #pragma once
 
 /// \file
-/// The coupled-tank plant (paper eqs. 1–2, Table 1; plants.md).
+/// The coupled-tank plant (paper eqs. 1–2, Table 1; docs/plants.md §1).
 
 #include <cmath>
 
@@ -19,14 +19,23 @@ namespace mjukf::models {
 /// The measurement depends on k_flow linearly through ẋ, the class of system MJUKF is made for.
 template <class Scalar_ = double>
 struct CoupledTank {
+  /// The floating-point type.
   using Scalar = Scalar_;
+  /// n = 2: the levels (h₁, h₂).
   static constexpr int StateDim = 2;
+  /// p = 1: k_flow.
   static constexpr int ParamDim = 1;
+  /// m = 2: both levels are measured.
   static constexpr int MeasDim = 2;
+  /// One input: the pump voltage.
   static constexpr int InputDim = 1;
+  /// x = (h₁, h₂) in cm.
   using State = Eigen::Matrix<Scalar, StateDim, 1>;
+  /// θ = (k_flow) in (cm³/s)/V.
   using Param = Eigen::Matrix<Scalar, ParamDim, 1>;
+  /// y = (h₁, h₂).
   using Meas = Eigen::Matrix<Scalar, MeasDim, 1>;
+  /// u = (pump voltage) in V.
   using Input = Eigen::Matrix<Scalar, InputDim, 1>;
 
   Scalar area1 = Scalar(15.5179);   ///< A₁, cross-section of the upper tank (cm²)

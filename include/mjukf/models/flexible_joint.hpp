@@ -1,7 +1,7 @@
 #pragma once
 
 /// \file
-/// The single-link robot with a flexible joint (paper eqs. 3–5, Table 2; plants.md).
+/// The single-link robot with a flexible joint (paper eqs. 3–5, Table 2; docs/plants.md §2).
 
 #include <cmath>
 
@@ -23,14 +23,23 @@ namespace mjukf::models {
 /// h = 0.3 m), which produced the paper's tables; `paperTable2()` has Table 2's k = 0.18.
 template <class Scalar_ = double>
 struct FlexibleJoint {
+  /// The floating-point type.
   using Scalar = Scalar_;
+  /// n = 4: motor and link angles and speeds.
   static constexpr int StateDim = 4;
+  /// p = 2: K_τ and m.
   static constexpr int ParamDim = 2;
+  /// m = 4: the whole state is measured.
   static constexpr int MeasDim = 4;
+  /// One input: the motor voltage.
   static constexpr int InputDim = 1;
+  /// x = (θ_m, ω_m, θ_l, ω_l) in rad and rad/s.
   using State = Eigen::Matrix<Scalar, StateDim, 1>;
+  /// θ = (K_τ, m) in N m/V and kg.
   using Param = Eigen::Matrix<Scalar, ParamDim, 1>;
+  /// y = x.
   using Meas = Eigen::Matrix<Scalar, MeasDim, 1>;
+  /// u = (motor voltage) in V.
   using Input = Eigen::Matrix<Scalar, InputDim, 1>;
 
   Scalar motorInertia = Scalar(3.7e-3);     ///< J_m (kg m²)
@@ -43,7 +52,7 @@ struct FlexibleJoint {
   Scalar inputFrequency = Scalar(1);        ///< f of u(t) (Hz)
 
   /// The constants as printed in the paper's Table 2 (k = 0.18). The published results were not made
-  /// with these; see plants.md.
+  /// with these; see docs/plants.md §2.
   static FlexibleJoint paperTable2() {
     FlexibleJoint model;
     model.springStiffness = Scalar(0.18);

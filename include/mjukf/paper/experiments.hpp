@@ -16,15 +16,24 @@ namespace mjukf::paper {
 /// The coupled tank: 200 s at h = 1 ms, a measurement every 2 steps, first guess k_flow = 2.
 template <class Scalar = double>
 struct CoupledTankExperiment {
+  /// The plant.
   using Model = models::CoupledTank<Scalar>;
+  /// Its state vector.
   using State = typename Model::State;
+  /// Its parameter vector.
   using Param = typename Model::Param;
+  /// h, the integration step (s).
   static constexpr Scalar stepSize = Scalar(1e-3);
+  /// The length of a run (s).
   static constexpr Scalar duration = Scalar(200);
+  /// N: one measurement update every N integration steps.
   static constexpr int measurementEvery = 2;
+  /// The first data row of the RMSE (eq. 16).
   static constexpr long rmseFromRow = 20000;  // t ≥ 20 s
 
+  /// x̂₀ = 0.
   static State initialState() { return State::Zero(); }
+  /// θ̂₀, the first guess.
   static Param initialParameters() { return Param::Constant(Scalar(2)); }
 
   /// The state-only filter, given the true k_flow: P₀, Q and R as for MJUKF.
@@ -36,6 +45,7 @@ struct CoupledTankExperiment {
     return s;
   }
 
+  /// JUKF's settings (docs/plants.md §5).
   static JointUkfSettings<Model> jointUkf() {
     JointUkfSettings<Model> s;
     s.initialCovariance.diagonal() << Scalar(0.5), Scalar(0.5), Scalar(0.1);
@@ -44,6 +54,7 @@ struct CoupledTankExperiment {
     return s;
   }
 
+  /// MJUKF's settings (docs/plants.md §5).
   static ModifiedJointUkfSettings<Model> modifiedJointUkf() {
     ModifiedJointUkfSettings<Model> s;
     s.initialCovariance.diagonal().setConstant(Scalar(0.5));
@@ -74,17 +85,26 @@ struct CoupledTankExperiment {
 /// (K_τ, m) = (0.1, 0.15).
 template <class Scalar = double>
 struct FlexibleJointExperiment {
+  /// The plant.
   using Model = models::FlexibleJoint<Scalar>;
+  /// Its state vector.
   using State = typename Model::State;
+  /// Its parameter vector.
   using Param = typename Model::Param;
+  /// h, the integration step (s).
   static constexpr Scalar stepSize = Scalar(1e-3);
+  /// The length of a run (s).
   static constexpr Scalar duration = Scalar(20);
+  /// N: one measurement update every N integration steps.
   static constexpr int measurementEvery = 5;
+  /// The first data row of the RMSE (eq. 16).
   static constexpr long rmseFromRow = 2000;  // t ≥ 2 s
   /// ξ of the parameter-change scenario (Figs. 12–14), which converges faster.
   static constexpr Scalar parameterChangeScaling = Scalar(-0.0035);
 
+  /// x̂₀ = 0.
   static State initialState() { return State::Zero(); }
+  /// θ̂₀, the first guess.
   static Param initialParameters() { return Param(Scalar(0.1), Scalar(0.15)); }
 
   /// The state-only filter, given the true parameters: P₀, Q and R as for MJUKF.
@@ -96,6 +116,7 @@ struct FlexibleJointExperiment {
     return s;
   }
 
+  /// JUKF's settings (docs/plants.md §5).
   static JointUkfSettings<Model> jointUkf() {
     JointUkfSettings<Model> s;
     s.initialCovariance.diagonal() << Scalar(0.5), Scalar(0.5), Scalar(0.5), Scalar(0.5), Scalar(1e-3),
@@ -105,6 +126,7 @@ struct FlexibleJointExperiment {
     return s;
   }
 
+  /// MJUKF's settings (docs/plants.md §5).
   static ModifiedJointUkfSettings<Model> modifiedJointUkf() {
     ModifiedJointUkfSettings<Model> s;
     s.initialCovariance.diagonal().setConstant(Scalar(0.5));

@@ -14,8 +14,10 @@ namespace mjukf::paper {
 template <class Scalar, int Dim>
 class RmseAccumulator {
  public:
+  /// A vector of the Dim quantities.
   using Vector = Eigen::Matrix<Scalar, Dim, 1>;
 
+  /// Adds one row: the squared error of each component.
   void add(const Vector& estimate, const Vector& truth) {
     sumOfSquares_ += (estimate - truth).template cast<double>().array().square().matrix();
     ++count_;
@@ -24,6 +26,7 @@ class RmseAccumulator {
   Vector value() const {
     return (sumOfSquares_ / double(count_)).array().sqrt().matrix().template cast<Scalar>();
   }
+  /// The number of rows added.
   long count() const { return count_; }
 
  private:

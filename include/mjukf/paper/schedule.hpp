@@ -11,7 +11,9 @@ namespace mjukf::paper {
 /// step and the row whose estimate it would have produced; and how many steps were taken with a
 /// repaired covariance and how many measurements the gate rejected on the way.
 struct ScheduleOutcome {
+  /// Ok after the last row, otherwise the status of the refused step that stopped the run.
   Status status = Status::Ok;
+  /// The row the refused step would have produced, or the last row (rows − 1) after a complete run.
   long row = 0;
   long repairs = 0;   ///< steps that returned Status::Repaired (taken)
   long rejected = 0;  ///< measurement updates that returned Status::MeasurementRejected

@@ -35,7 +35,9 @@ namespace mjukf {
 /// A SUNDIALS call failed; `flag()` is its return code (negative CVODE codes, see `cvode.h`).
 class CvodeError : public std::runtime_error {
  public:
+  /// An error with the CVODE return flag.
   CvodeError(const std::string& what, int flag) : std::runtime_error(what), flag_(flag) {}
+  /// The CVODE return flag.
   int flag() const { return flag_; }
 
  private:
@@ -46,7 +48,9 @@ class CvodeError : public std::runtime_error {
 /// `relativeTolerance · |xᵢ| + absoluteTolerance`; the global error over a long horizon can be a few
 /// orders of magnitude larger (docs/integrators.md measures it).
 struct CvodeSettings {
+  /// CVODE's relative tolerance.
   double relativeTolerance = 1e-10;
+  /// CVODE's absolute tolerance.
   double absoluteTolerance = 1e-12;
   long maxSteps = 1000000;  ///< Internal steps allowed per output interval.
   double maxStep = 0;       ///< Largest internal step; 0 leaves it unlimited.
@@ -59,6 +63,7 @@ struct CvodeStats {
   long evaluations = 0;  ///< Evaluations of f by CVODE (without its difference-quotient Jacobian).
 };
 
+/// \cond INTERNAL
 namespace detail::cvode {
 
 struct ContextDeleter {
@@ -181,6 +186,7 @@ class Session {
 };
 
 }  // namespace detail::cvode
+/// \endcond
 
 /// `f(t, x) = model.derivative(t, x, model.input(t), θ)`: a model with its own input signal, as the
 /// filters integrate it (detail/propagation.hpp). The model is held by reference.
@@ -203,12 +209,14 @@ auto modelRhs(const Model& model, const typename Model::Param& theta) {
 template <class Scalar_ = double>
 class Cvode {
  public:
+  /// The floating-point type.
   using Scalar = Scalar_;
   /// Adaptive: BDF of order 1 … 5 with error control; `order` is the largest order it uses.
   static constexpr int order = 5;
   /// Not fixed: adaptive. `integrateGrid` reports the count.
   static constexpr int evaluationsPerStep = -1;
 
+  /// A stepper with the given tolerances.
   explicit Cvode(const CvodeSettings& settings = CvodeSettings()) : settings_(settings) {
     if (!(settings.relativeTolerance >= 0) || !(settings.absoluteTolerance >= 0) ||
         !(settings.relativeTolerance + settings.absoluteTolerance > 0))
@@ -218,6 +226,7 @@ class Cvode {
       throw std::invalid_argument("mjukf::Cvode: setting 'maxOrder' must lie in 1 … 5");
   }
 
+  /// The tolerances.
   const CvodeSettings& settings() const { return settings_; }
 
   /// x(t + h) from x(t) = x. As a filter's stepper it must report failure the way the filters
