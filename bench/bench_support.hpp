@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 
+#include "mjukf/dual_ukf.hpp"
 #include "mjukf/integrators/i_tr_bdf2.hpp"
 #include "mjukf/joint_ukf.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
@@ -19,12 +20,21 @@
 
 namespace mjukf::bench {
 
-using Tank = paper::CoupledTankExperiment<double>;
-using Robot = paper::FlexibleJointExperiment<double>;
+template <class Scalar = double>
+using TankOf = paper::CoupledTankExperiment<Scalar>;
+template <class Scalar = double>
+using RobotOf = paper::FlexibleJointExperiment<Scalar>;
+using Tank = TankOf<double>;
+using Robot = RobotOf<double>;
 
 template <class Experiment>
 const char* plantName() {
-  return std::is_same_v<Experiment, Tank> ? "coupled_tank" : "flexible_joint";
+  return std::is_same_v<Experiment, TankOf<typename Experiment::Model::Scalar>> ? "coupled_tank" : "flexible_joint";
+}
+
+template <class Scalar>
+const char* scalarName() {
+  return std::is_same_v<Scalar, float> ? "float" : "double";
 }
 
 /// How often a model was evaluated, through a pointer so the count survives the copy a filter keeps.
@@ -84,19 +94,42 @@ ModifiedJointUkfSettings<To> rebind(const ModifiedJointUkfSettings<From>& s) {
   return r;
 }
 
-enum class FilterKind { Ukf, Jukf, Mjukf };
+template <class To, class From>
+DualUkfSettings<To> rebind(const DualUkfSettings<From>& s) {
+  using Shared = ParameterEstimationSettings<typename From::Scalar, From::StateDim, From::MeasDim, From::ParamDim>;
+  DualUkfSettings<To> r;
+  static_cast<Shared&>(r) = static_cast<const Shared&>(s);
+  r.parameterSigmaPoints = s.parameterSigmaPoints;
+  r.initialParameterCovariance = s.initialParameterCovariance;
+  r.parameterProcessNoise = s.parameterProcessNoise;
+  r.parameterObservationNoise = s.parameterObservationNoise;
+  r.parameterForgetting = s.parameterForgetting;
+  r.ordering = s.ordering;
+  return r;
+}
+
+/// ukf, jukf, mjukf: the paper's settings; dual: the dual UKF with the library's settings
+/// (Experiment::dualUkf(), PriorParameters ordering; the paper runs none).
+enum class FilterKind { Ukf, Jukf, Mjukf, Dual };
 
 inline const char* filterName(FilterKind kind) {
-  return kind == FilterKind::Ukf ? "ukf" : kind == FilterKind::Jukf ? "jukf" : "mjukf";
+  switch (kind) {
+    case FilterKind::Ukf: return "ukf";
+    case FilterKind::Jukf: return "jukf";
+    case FilterKind::Mjukf: return "mjukf";
+    case FilterKind::Dual: return "dual";
+  }
+  return "?";
 }
 
 template <FilterKind Kind, class Model>
 using FilterType = std::conditional_t<
     Kind == FilterKind::Ukf, Ukf<Model>,
-    std::conditional_t<Kind == FilterKind::Jukf, JointUkf<Model>, ModifiedJointUkf<Model>>>;
+    std::conditional_t<Kind == FilterKind::Jukf, JointUkf<Model>,
+                       std::conditional_t<Kind == FilterKind::Mjukf, ModifiedJointUkf<Model>, DualUkf<Model>>>>;
 
-/// The filter of kind `Kind` with the paper's settings of `Experiment`, on `model` (the plant's model
-/// or a counting wrapper of it). The UKF is given the true parameters, the joint filters the first guess.
+/// The filter of kind `Kind` with the settings of `Experiment`, on `model` (the plant's model or a
+/// counting wrapper of it). The UKF is given the true parameters, the others the first guess.
 template <FilterKind Kind, class Experiment, class Model = typename Experiment::Model>
 FilterType<Kind, Model> makeFilter(const Model& model = Model()) {
   const auto x0 = Experiment::initialState();
@@ -106,29 +139,33 @@ FilterType<Kind, Model> makeFilter(const Model& model = Model()) {
   else if constexpr (Kind == FilterKind::Jukf)
     return FilterType<Kind, Model>(model, x0, Experiment::initialParameters(),
                                    rebind<Model>(Experiment::jointUkf()));
-  else
+  else if constexpr (Kind == FilterKind::Mjukf)
     return FilterType<Kind, Model>(model, x0, Experiment::initialParameters(),
                                    rebind<Model>(Experiment::modifiedJointUkf()));
+  else
+    return FilterType<Kind, Model>(model, x0, Experiment::initialParameters(), rebind<Model>(Experiment::dualUkf()));
 }
 
 /// Measurements y_k = x(k h) + v_k of the plant with its true parameters, simulated with I-TR-BDF2
 /// from the experiment's initial state; v_k is Gaussian with the paper's R. Row 0 is the initial state.
+/// The same noise draws (in double) for either scalar type.
 template <class Experiment>
 std::vector<typename Experiment::Model::Meas> simulatedMeasurements(long rows) {
   using Model = typename Experiment::Model;
+  using Scalar = typename Model::Scalar;
   using State = typename Model::State;
   const Model model;
   const auto theta = Model::trueParameters();
-  const double noiseSd = std::sqrt(Experiment::ukf().measurementNoise(0, 0));
+  const double noiseSd = std::sqrt(double(Experiment::ukf().measurementNoise(0, 0)));
   std::mt19937_64 rng(2024);
   std::normal_distribution<double> normal(0.0, noiseSd);
   std::vector<typename Model::Meas> y(static_cast<std::size_t>(rows));
   if (rows < 1) return y;
-  simulate(model, ITrBdf2<double>(), Experiment::initialState(), theta, 0.0, Experiment::stepSize, rows - 1,
-           [&](long k, double, const State& x) {
+  simulate(model, ITrBdf2<Scalar>(), Experiment::initialState(), theta, Scalar(0), Experiment::stepSize, rows - 1,
+           [&](long k, Scalar, const State& x) {
              auto& row = y[static_cast<std::size_t>(k)];
              row = model.measurement(x, theta);
-             for (int c = 0; c < row.size(); ++c) row(c) += normal(rng);
+             for (int c = 0; c < row.size(); ++c) row(c) += Scalar(normal(rng));
            });
   return y;
 }

@@ -12,7 +12,6 @@
 
 #include "bench_support.hpp"
 #include "common/csv.hpp"
-#include "mjukf/dual_ukf.hpp"
 #include "mjukf/paper/rmse.hpp"
 #include "mjukf/paper/schedule.hpp"
 
@@ -78,24 +77,15 @@ void registerRun() {
   registerRun<Experiment>(filterName(Kind), [] { return makeFilter<Kind, Experiment>(); });
 }
 
-// The dual UKF from the paper's first guess, with the library's settings.
-template <class Experiment>
-void registerDualRun() {
-  registerRun<Experiment>("dual", [] {
-    using Model = typename Experiment::Model;
-    return DualUkf<Model>(Model(), Experiment::initialState(), Experiment::initialParameters(), Experiment::dualUkf());
-  });
-}
-
 const bool registered = [] {
   registerRun<FilterKind::Ukf, Tank>();
   registerRun<FilterKind::Jukf, Tank>();
   registerRun<FilterKind::Mjukf, Tank>();
-  registerDualRun<Tank>();
+  registerRun<FilterKind::Dual, Tank>();
   registerRun<FilterKind::Ukf, Robot>();
   registerRun<FilterKind::Jukf, Robot>();
   registerRun<FilterKind::Mjukf, Robot>();
-  registerDualRun<Robot>();
+  registerRun<FilterKind::Dual, Robot>();
   return true;
 }();
 

@@ -8,6 +8,8 @@
 
 #include <cmath>
 #include <limits>
+#include <type_traits>
+#include <utility>
 
 #include <Eigen/Core>
 
@@ -20,6 +22,19 @@ namespace mjukf::detail {
 // that is all rounding, and whether it passes then depends on the order of the sums: a P accepted here
 // must also factor in any other correct Cholesky (Eigen's LLT), which the fuzz target checks.
 // `s` must not alias `a`.
+// Calls f(std::integral_constant<int, I>()) for I = 0 … N − 1 in order while it returns true: a loop
+// whose index is a compile-time constant, so that every loop below has a fixed trip count and the
+// compiler unrolls all of them (nested loops whose bounds depend on an outer index are otherwise kept
+// as loops, and at N = 4 their counters and branches cost as much as the arithmetic).
+template <class F, int... I>
+bool forEachIndexIn(F& f, std::integer_sequence<int, I...>) {
+  return (f(std::integral_constant<int, I>()) && ...);
+}
+template <int N, class F>
+bool forEachIndex(F&& f) {
+  return forEachIndexIn(f, std::make_integer_sequence<int, N>());
+}
+
 template <class Scalar, int N>
 bool choleskyLower(const Eigen::Matrix<Scalar, N, N>& a, Eigen::Matrix<Scalar, N, N>& s) {
   // Computed as A = L D Lᵀ (L unit lower triangular), then S = L D^½. The pivots dⱼ are the squares of
@@ -28,27 +43,34 @@ bool choleskyLower(const Eigen::Matrix<Scalar, N, N>& a, Eigen::Matrix<Scalar, N
   // dependent divisions and roots is the cost of the factorisation.
   constexpr Scalar margin = Scalar(N) * std::numeric_limits<Scalar>::epsilon();
   Scalar inversePivot[N];
-  for (int j = 0; j < N; ++j) {
+  const bool positive = forEachIndex<N>([&](auto jIndex) {
+    constexpr int j = jIndex.value;
     // s(j, k) for k < j holds Lⱼₖ dₖ here; s(k, j) (upper triangle, free until the end) holds Lⱼₖ.
     Scalar pivot = a(j, j);
-    for (int k = 0; k < j; ++k) pivot -= s(k, j) * s(j, k);
+    forEachIndex<j>([&](auto k) { return pivot -= s(k.value, j) * s(j, k.value), true; });
     if (!(pivot > margin * a(j, j)) || !(pivot <= std::numeric_limits<Scalar>::max())) return false;  // NaN fails too
     s(j, j) = pivot;
     inversePivot[j] = Scalar(1) / pivot;
-    for (int i = j + 1; i < N; ++i) {
+    forEachIndex<N - j - 1>([&](auto offset) {
+      constexpr int i = j + 1 + offset.value;
       Scalar v = a(i, j);
-      for (int k = 0; k < j; ++k) v -= s(k, i) * s(j, k);
-      s(i, j) = v;                      // Lᵢⱼ dⱼ
-      s(j, i) = v * inversePivot[j];    // Lᵢⱼ
-    }
-  }
-  for (int j = 0; j < N; ++j) {
+      forEachIndex<j>([&](auto k) { return v -= s(k.value, i) * s(j, k.value), true; });
+      s(i, j) = v;                    // Lᵢⱼ dⱼ
+      s(j, i) = v * inversePivot[j];  // Lᵢⱼ
+      return true;
+    });
+    return true;
+  });
+  if (!positive) return false;
+  forEachIndex<N>([&](auto jIndex) {
+    constexpr int j = jIndex.value;
     const Scalar root = std::sqrt(s(j, j));
     const Scalar inverseRoot = root * inversePivot[j];  // dⱼ^½ / dⱼ = dⱼ^-½
-    for (int i = j + 1; i < N; ++i) s(i, j) *= inverseRoot;  // Lᵢⱼ dⱼ · dⱼ^-½ = Lᵢⱼ dⱼ^½
+    forEachIndex<N - j - 1>([&](auto offset) { return s(j + 1 + offset.value, j) *= inverseRoot, true; });
     s(j, j) = root;
-    for (int i = 0; i < j; ++i) s(i, j) = Scalar(0);
-  }
+    forEachIndex<j>([&](auto i) { return s(i.value, j) = Scalar(0), true; });
+    return true;
+  });
   return true;
 }
 

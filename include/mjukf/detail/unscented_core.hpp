@@ -115,23 +115,22 @@ class UnscentedCore {
 
     if (!allFinite(d.innovationCovariance) || !choleskyLower(d.innovationCovariance, innovationFactor_))
       return Status::InnovationNotPositiveDefinite;
-    // NIS = νᵀ P_yy⁻¹ ν = |S⁻¹ ν|² with P_yy = S Sᵀ.
+    // With P_yy = S Sᵀ, the gain is K = P_xy P_yy⁻¹ = U S⁻¹ with U = P_xy S⁻ᵀ, so that
+    //   K ν = U w with w = S⁻¹ ν (the whitened innovation, whose |w|² is the NIS), and
+    //   K P_yy Kᵀ = U Uᵀ:
+    // one triangular solve for U instead of two for K, and a P that is symmetric as computed.
     MeasVector whitened = d.innovation;
-    solveLower(whitened);
+    solveLowerInPlace(whitened);
     d.nis = whitened.squaredNorm();
     // An innovation or NIS that overflowed (a model returning huge values) is no measurement to use,
     // even when the gain is zero.
     if (!std::isfinite(d.nis) || !allFinite(d.innovation)) return Status::NonFiniteResult;
     if (presentCount > 0 && d.nis > gate.nisThreshold(presentCount - 1)) return Status::MeasurementRejected;
-    // K = P_xy P_yy⁻¹, as Kᵀ = P_yy⁻¹ P_xyᵀ with the Cholesky factor (P_yy is symmetric).
-    gainTransposed_ = crossCovariance_.transpose();
-    solveLower(gainTransposed_);
-    solveUpper(gainTransposed_);
+    whitenCrossCovariance();  // U
     candidateMean_ = priorMean;
-    candidateMean_.noalias() += gainTransposed_.transpose() * d.innovation;
-    // P = P⁻ − K P_yy Kᵀ = P⁻ − P_xy Kᵀ
+    candidateMean_.noalias() += crossCovariance_ * whitened;  // x̂ = x̂⁻ + K ν
     candidateCovariance_ = priorCov;
-    candidateCovariance_.noalias() -= crossCovariance_ * gainTransposed_;
+    candidateCovariance_.noalias() -= crossCovariance_.lazyProduct(crossCovariance_.transpose());  // P = P⁻ − K P_yy Kᵀ
     return Status::Ok;
   }
 
@@ -184,23 +183,22 @@ class UnscentedCore {
     out.noalias() = (a * sigmaPoints_.covarianceWeights().asDiagonal()).lazyProduct(b.transpose());
   }
 
-  // B ← S⁻¹ B and B ← S⁻ᵀ B with the lower Cholesky factor S of P_yy, by substitution a row at a time.
-  // Written out because Eigen's solve with a matrix right-hand side takes its general blocked path
-  // (packing, level-3 kernels), which costs more than all the rest of the update at these sizes.
-  template <class Rhs>
-  void solveLower(Rhs& b) const {
+  // w ← S⁻¹ w with the lower Cholesky factor S of P_yy, by forward substitution.
+  void solveLowerInPlace(MeasVector& w) const {
     const MeasMatrix& s = innovationFactor_;
     for (int i = 0; i < M; ++i) {
-      for (int k = 0; k < i; ++k) b.row(i) -= s(i, k) * b.row(k);
-      b.row(i) /= s(i, i);
+      for (int k = 0; k < i; ++k) w(i) -= s(i, k) * w(k);
+      w(i) /= s(i, i);
     }
   }
-  template <class Rhs>
-  void solveUpper(Rhs& b) const {
+  // P_xy ← U = P_xy S⁻ᵀ, i.e. U Sᵀ = P_xy solved a column at a time (columns of U are contiguous).
+  // Written out because Eigen's triangular solve with a matrix right-hand side takes its general
+  // blocked path (packing, level-3 kernels), which costs more than all the rest of the update here.
+  void whitenCrossCovariance() {
     const MeasMatrix& s = innovationFactor_;
-    for (int i = M - 1; i >= 0; --i) {
-      for (int k = i + 1; k < M; ++k) b.row(i) -= s(k, i) * b.row(k);
-      b.row(i) /= s(i, i);
+    for (int j = 0; j < M; ++j) {
+      for (int k = 0; k < j; ++k) crossCovariance_.col(j) -= s(j, k) * crossCovariance_.col(k);
+      crossCovariance_.col(j) /= s(j, j);
     }
   }
 
@@ -217,8 +215,7 @@ class UnscentedCore {
   MeasPoints measuredPoints_;          // Yᵢ = g(χᵢ⁺)
   Points deviations_;                  // χᵢ⁺ − x̂⁻
   MeasPoints measurementDeviations_;   // Yᵢ − ŷ
-  Eigen::Matrix<Scalar, L, M> crossCovariance_;  // P_xy
-  Eigen::Matrix<Scalar, M, L> gainTransposed_;   // Kᵀ
+  Eigen::Matrix<Scalar, L, M> crossCovariance_;  // P_xy, then U = P_xy S⁻ᵀ
   MeasMatrix innovationFactor_;        // S with P_yy = S Sᵀ
   Vector candidateMean_;
   Matrix candidateCovariance_;

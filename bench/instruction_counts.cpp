@@ -1,0 +1,66 @@
+// mjukf_instruction_counts: the cases of the step benchmarks (step_cases.hpp), counted in instructions
+// instead of timed, so that a change's cost can be judged without the noise of a shared machine.
+// Meant to run under callgrind; scripts/instructions.sh does that and prints the table:
+//
+//   valgrind --tool=callgrind --collect-atstart=no mjukf_instruction_counts [substring]
+//
+// For each case (<kind>/<plant>/<filter>/<scalar>, kind step, open or floor) it takes kWarmUp steps
+// uncounted, then counts kCounted steps and dumps callgrind's totals under the case's name; per step is
+// the total over kCounted. Run natively, it runs the same steps and counts nothing.
+
+#include <cstdio>
+#include <cstring>
+#include <string>
+
+#include <valgrind/callgrind.h>
+
+#include "bench_support.hpp"
+#include "step_cases.hpp"
+
+namespace mjukf::bench {
+namespace {
+
+constexpr int kWarmUp = 200;
+constexpr int kCounted = 1000;
+
+template <class Case>
+bool count(const std::string& name, const char* only) {
+  if (only && name.find(only) == std::string::npos) return true;
+  Case steps;
+  for (int i = 0; i < kWarmUp; ++i) steps.once();
+  bool ok = true;
+  CALLGRIND_TOGGLE_COLLECT;
+  for (int i = 0; i < kCounted; ++i) ok = steps.once() && ok;
+  CALLGRIND_TOGGLE_COLLECT;
+  CALLGRIND_DUMP_STATS_AT(name.c_str());
+  std::printf("%s %d%s\n", name.c_str(), kCounted, ok ? "" : " refused");
+  return ok;
+}
+
+template <FilterKind Kind, class Experiment>
+bool countFilter(const char* only) {
+  using Scalar = typename Experiment::Model::Scalar;
+  const std::string suffix =
+      std::string("/") + plantName<Experiment>() + "/" + filterName(Kind) + "/" + scalarName<Scalar>();
+  return count<MeasurementSteps<Kind, Experiment>>("step" + suffix, only) &&
+         count<OpenLoopSteps<Kind, Experiment>>("open" + suffix, only) &&
+         count<FloorSteps<Kind, Experiment>>("floor" + suffix, only);
+}
+
+template <class Experiment>
+bool countPlant(const char* only) {
+  return countFilter<FilterKind::Ukf, Experiment>(only) && countFilter<FilterKind::Jukf, Experiment>(only) &&
+         countFilter<FilterKind::Mjukf, Experiment>(only) && countFilter<FilterKind::Dual, Experiment>(only);
+}
+
+}  // namespace
+}  // namespace mjukf::bench
+
+int main(int argc, char** argv) {
+  using namespace mjukf::bench;
+  const char* only = argc > 1 ? argv[1] : nullptr;
+  const bool ok = countPlant<RobotOf<double>>(only) && countPlant<TankOf<double>>(only) &&
+                  countPlant<RobotOf<float>>(only) && countPlant<TankOf<float>>(only);
+  if (!ok) std::fprintf(stderr, "a filter refused a step: its counts are not those of the schedule\n");
+  return ok ? 0 : 1;
+}
