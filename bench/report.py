@@ -175,7 +175,7 @@ def main():
         w("")
 
     # Instructions (deterministic).
-    for name, title in (("instructions.md", "## Instructions per step (callgrind)"),):
+    for name, title in (("instructions.txt", "## Instructions per step (callgrind)"),):
         path = os.path.join(results_dir, name)
         if os.path.exists(path):
             w(title)

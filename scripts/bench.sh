@@ -46,7 +46,7 @@ for plant in flexible_joint coupled_tank; do
 done
 
 # Instructions per step (deterministic).
-bash scripts/instructions.sh build-bench "$results/instructions.md"
+bash scripts/instructions.sh build-bench "$results/instructions.txt"
 if [[ $native == 1 ]]; then
   cmake -S . -B build-bench-native "${common[@]}" -DMJUKF_BUILD_EXAMPLES=OFF -DMJUKF_BUILD_TESTS=OFF -DMJUKF_BENCH_NATIVE=ON
   run build-bench-native native

@@ -2,7 +2,7 @@
 # Instructions per step of every filter and plant, counted by callgrind: deterministic figures that a
 # change's cost can be judged by without the noise of a shared machine.
 #
-#   bash scripts/instructions.sh [build-dir] [out.md]     # default build-bench, table on stdout
+#   bash scripts/instructions.sh [build-dir] [out-file]   # default build-bench, table on stdout
 #
 # Builds mjukf_instruction_counts (bench/instruction_counts.cpp) in the build directory (configured by
 # scripts/bench.sh, or here with the same options), runs it under valgrind --tool=callgrind, and
