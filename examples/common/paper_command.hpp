@@ -7,7 +7,6 @@
 // so its column has no published value.
 
 #include <algorithm>
-#include <cstdarg>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -22,6 +21,9 @@
 
 #include "common/cli.hpp"
 #include "common/estimation.hpp"
+#include "common/format.hpp"
+#include "common/statistics.hpp"
+#include "common/experiment.hpp"
 #include "common/plant.hpp"
 #include "common/plot.hpp"
 #include "common/simulation.hpp"
@@ -29,25 +31,6 @@
 namespace mjukf::examples {
 
 namespace detail {
-
-// printf into a string of any length, for the tables that go both to the console and to table.txt.
-[[gnu::format(printf, 1, 2)]] inline std::string format(const char* pattern, ...) {
-  va_list args, again;
-  va_start(args, pattern);
-  va_copy(again, args);
-  const int size = std::vsnprintf(nullptr, 0, pattern, args);
-  va_end(args);
-  std::string text(size > 0 ? static_cast<std::size_t>(size) : 0, '\0');
-  if (size > 0) std::vsnprintf(text.data(), text.size() + 1, pattern, again);
-  va_end(again);
-  return text;
-}
-
-inline double median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
 
 template <class Model>
 struct Comparison {
@@ -186,13 +169,10 @@ PlantData<typename Plant::Experiment::Model> paperData(const std::string& path, 
     description = path;
     return data;
   }
-  SimulationOptions<Model> options;
-  options.stepSize = h;
+  auto options = experimentSimulation<typename Plant::Experiment>(seed, truth);
   options.duration = duration;
-  options.seed = seed;
-  options.parameters = truth;
   description = format("fresh simulation (%g s, seed %llu, 30 dB SNR)", duration, static_cast<unsigned long long>(seed));
-  return simulatePlant(Model(), options);
+  return simulateExperiment<typename Plant::Experiment>(options);
 }
 
 }  // namespace detail
