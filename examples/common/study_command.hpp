@@ -258,7 +258,7 @@ bool drawStudyPlot(Plotter& plotter, const std::string& png, const std::string& 
               p, Plant::title, scenario.c_str());
   for (int i = 0; i < p; ++i) {
     const Quantity& q = Plant::parameters[std::size_t(i)];
-    s += format("set title \"%s\"\nset ylabel \"RMSE %s (%s)\"\n", q.label, q.name, q.unit);
+    s += format("set title \"%s\"\nset ylabel \"RMSE %s (%s)\"\n", q.label, q.label, q.unit);
     s += format("plot for [f=1:words(filters)] %s skip 1 using (f):((strcol(2) eq word(filters,f) && "
                 "strcol(3) eq \"%s\" && column(%d) == 0) ? column(%d) : NaN) lc f\n",
                 gnuplotQuote(csv).c_str(), scenario.c_str(), divergedColumn, 4 + i);
