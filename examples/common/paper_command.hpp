@@ -26,6 +26,7 @@
 #include "common/experiment.hpp"
 #include "common/plant.hpp"
 #include "common/plot.hpp"
+#include "common/report.hpp"
 #include "common/simulation.hpp"
 
 namespace mjukf::examples {
@@ -202,11 +203,8 @@ int paperCommand(const std::vector<std::string>& words) {
   const auto path = [&](const std::string& name) { return (fs::path(outDir) / (std::string(Plant::slug) + "_" + name)).string(); };
   Plotter plotter;
   std::vector<std::string> written;
-  std::string report;
-  const auto say = [&](const std::string& line) {
-    std::cout << line << "\n";
-    report += line + "\n";
-  };
+  detail::Report report;
+  const auto say = [&](const std::string& line) { report.say(line); };
 
   // The paper's table: JUKF and MJUKF, the paper's settings, on one data set; beside them the dual UKF
   // with the library's settings (no published value: the paper has no dual filter).
@@ -285,16 +283,7 @@ int paperCommand(const std::vector<std::string>& words) {
                                    "state estimates with a parameter change", plotter, written);
   }
 
-  const std::string tableFile = path("table.txt");
-  {
-    std::ofstream table(tableFile);
-    table << report;
-    table.close();
-    if (!table) throw OutputError(tableFile + ": cannot write the file");
-  }
-  written.push_back(tableFile);
-  std::cout << "\nwrote:\n";
-  for (const auto& file : written) std::cout << "  " << file << "\n";
+  report.finish(path("table.txt"), written);
   return kExitOk;
 }
 

@@ -36,6 +36,7 @@
 #include "common/format.hpp"
 #include "common/plant.hpp"
 #include "common/plot.hpp"
+#include "common/report.hpp"
 #include "common/statistics.hpp"
 
 namespace mjukf::examples {
@@ -366,11 +367,8 @@ int studyCommand(const std::vector<std::string>& words) {
 
   // The table: per scenario and filter, mean ± sd and median of each parameter's RMSE over the runs
   // that did not diverge, and how many diverged.
-  std::string report;
-  const auto say = [&](const std::string& line) {
-    std::cout << line << "\n";
-    report += line + "\n";
-  };
+  detail::Report report;
+  const auto say = [&](const std::string& line) { report.say(line); };
   say(format("%s: study over %zu seeds (%s), RMSE over rows >= %ld; statistics over the runs that did not diverge",
              Plant::title, seeds.size(), args.text("--seeds", "1-20").c_str(), Experiment::rmseFromRow));
   say(format("diverged: the filter refused a step, or a final estimate is not finite or off by more than %g x the larger",
@@ -406,16 +404,7 @@ int studyCommand(const std::vector<std::string>& words) {
     if (detail::drawStudyPlot<Plant>(plotter, png, csvPath, scenarios[s].name, filters, divergedColumn))
       written.push_back(png);
   }
-  const std::string tableFile = path("study_table.txt");
-  {
-    std::ofstream table(tableFile);
-    table << report;
-    table.close();
-    if (!table) throw OutputError(tableFile + ": cannot write the file");
-  }
-  written.push_back(tableFile);
-  std::cout << "\nwrote:\n";
-  for (const auto& file : written) std::cout << "  " << file << "\n";
+  report.finish(path("study_table.txt"), written);
   return kExitOk;
 }
 

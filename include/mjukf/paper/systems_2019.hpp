@@ -64,21 +64,34 @@ struct Settings2019 {
   }
 };
 
-/// Van der Pol, μ = 0.2: 100 s at h = 0.1 s with RK4 from x₀ = (1.4, 0), a measurement every step;
-/// the filters start at x̂₀ = (0, 5), μ̂₀ = 5.
-template <class Scalar = double>
-struct VanDerPolExperiment {
-  using Model = models::VanDerPol<Scalar>;
+/// What both 2019 experiments share: RK4, 100 s, a measurement every step, noise of std 0.1 |xᵢ|, an
+/// RMSE window that leaves out the first tenth of the run (as the plants' do), and the UKF, JUKF and
+/// dual settings made from `Experiment::common()`.
+template <class Experiment, class Model_>
+struct Experiment2019 {
+  using Model = Model_;
+  using Scalar = typename Model::Scalar;
   using Integrator = Rk4<Scalar>;
   using State = typename Model::State;
   using Param = typename Model::Param;
-  static constexpr Scalar stepSize = Scalar(0.1);
   static constexpr Scalar duration = Scalar(100);
   static constexpr int measurementEvery = 1;
-  /// The RMSE window leaves out the first tenth of the run, as the plants' do (t ≥ 10 s).
-  static constexpr long rmseFromRow = 100;
   /// y = x + e, std(eᵢ) = 0.1 |xᵢ|.
   static constexpr Scalar relativeNoise = Scalar(0.1);
+
+  static UkfSettings<Model> ukf() { return Experiment::common().ukf(); }
+  static JointUkfSettings<Model> jointUkf() { return Experiment::common().jointUkf(); }
+  static DualUkfSettings<Model> dualUkf() { return Experiment::common().dualUkf(); }
+};
+
+/// Van der Pol, μ = 0.2: 100 s at h = 0.1 s with RK4 from x₀ = (1.4, 0), a measurement every step;
+/// the filters start at x̂₀ = (0, 5), μ̂₀ = 5.
+template <class Scalar = double>
+struct VanDerPolExperiment : Experiment2019<VanDerPolExperiment<Scalar>, models::VanDerPol<Scalar>> {
+  using Base = Experiment2019<VanDerPolExperiment<Scalar>, models::VanDerPol<Scalar>>;
+  using typename Base::Model, typename Base::State, typename Base::Param;
+  static constexpr Scalar stepSize = Scalar(0.1);
+  static constexpr long rmseFromRow = 100;  // t ≥ 10 s
 
   static State trueInitialState() { return State(Scalar(1.4), Scalar(0)); }
   static State initialState() { return State(Scalar(0), Scalar(5)); }
@@ -90,9 +103,6 @@ struct VanDerPolExperiment {
   static Settings2019<Model> common() {
     return {Scalar(5), Scalar(1e-3), Scalar(0.1), Scalar(5), Scalar(1e-5)};
   }
-  static UkfSettings<Model> ukf() { return common().ukf(); }
-  static JointUkfSettings<Model> jointUkf() { return common().jointUkf(); }
-  static DualUkfSettings<Model> dualUkf() { return common().dualUkf(); }
 
   /// ξ = 0.25, T = [0.5 0.5], p_θ = 0.5 (2019).
   static ModifiedJointUkfSettings<Model> modifiedJointUkf() {
@@ -107,18 +117,11 @@ struct VanDerPolExperiment {
 /// Lorenz, (σ, ρ, β) = (10, 28, 8/3): 100 s at h = 0.01 s with RK4 from x₀ = (0.9, 1, 1.1), a
 /// measurement every step; the filters start at x̂₀ = (1.5, 1.5, 1.5), θ̂₀ = (5, 21, 1/3).
 template <class Scalar = double>
-struct LorenzExperiment {
-  using Model = models::Lorenz<Scalar>;
-  using Integrator = Rk4<Scalar>;
-  using State = typename Model::State;
-  using Param = typename Model::Param;
+struct LorenzExperiment : Experiment2019<LorenzExperiment<Scalar>, models::Lorenz<Scalar>> {
+  using Base = Experiment2019<LorenzExperiment<Scalar>, models::Lorenz<Scalar>>;
+  using typename Base::Model, typename Base::State, typename Base::Param;
   static constexpr Scalar stepSize = Scalar(0.01);
-  static constexpr Scalar duration = Scalar(100);
-  static constexpr int measurementEvery = 1;
-  /// The RMSE window leaves out the first tenth of the run, as the plants' do (t ≥ 10 s).
-  static constexpr long rmseFromRow = 1000;
-  /// y = x + e, std(eᵢ) = 0.1 |xᵢ|.
-  static constexpr Scalar relativeNoise = Scalar(0.1);
+  static constexpr long rmseFromRow = 1000;  // t ≥ 10 s
 
   static State trueInitialState() { return State(Scalar(0.9), Scalar(1), Scalar(1.1)); }
   static State initialState() { return State::Constant(Scalar(1.5)); }
@@ -130,9 +133,6 @@ struct LorenzExperiment {
   static Settings2019<Model> common() {
     return {Scalar(1e-3), Scalar(1e-3), Scalar(0.2), Scalar(10), Scalar(1e-5)};
   }
-  static UkfSettings<Model> ukf() { return common().ukf(); }
-  static JointUkfSettings<Model> jointUkf() { return common().jointUkf(); }
-  static DualUkfSettings<Model> dualUkf() { return common().dualUkf(); }
 
   /// ξ = 0.006, T = [[0.8 0.1 0.1], [0.1 0.8 0.1], [0.1 0.1 0.8]], p_θ = 0.5 (2019).
   static ModifiedJointUkfSettings<Model> modifiedJointUkf() {
