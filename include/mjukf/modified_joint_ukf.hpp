@@ -33,6 +33,18 @@ struct ModifiedJointUkfSettings
   Transformation transformation = Transformation::Zero();
   /// p_θ of eq. 8: the spacing of the initial per-point parameters θᵢ around θ̂₀.
   Param parameterSpread = Param::Zero();
+  /// true: T is computed by the filter from the sensitivities of the measurements to the parameters
+  /// through the dynamics (eqs. 14–15), refreshed at every time update, and `transformation` is not
+  /// used (docs/tuning-mjukf.md). false (the paper): `transformation` as given.
+  bool automaticTransformation = false;
+  /// true: ξ is set at every measurement update, for each parameter, from the sensitivities, the
+  /// innovation covariance P_yy and the information gathered so far (a recursive least-squares gain,
+  /// docs/tuning-mjukf.md), and `scaling` is not used. false (the paper): `scaling` as given.
+  bool adaptiveScaling = false;
+  /// With `adaptiveScaling`: the memory of the parameter estimate in seconds of model time, i.e. the
+  /// time over which the parameters are taken as constant. A change of the true parameters is tracked
+  /// with about this time constant; a longer memory averages more noise out. Must be > 0.
+  Scalar convergenceTime = Scalar(1);
 };
 
 /// Modified joint unscented Kalman filter. Sigma points are drawn for the state alone (L = n, 2n + 1
