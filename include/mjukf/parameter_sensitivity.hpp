@@ -1,0 +1,186 @@
+#pragma once
+
+/// \file
+/// What the MJUKF's automatic modes know about the parameters (docs/tuning-mjukf.md): the sensitivity
+/// of the state estimate and of the predicted measurement to θ̂ through the dynamics and the filter,
+/// the information gathered about θ, and from them T (eqs. 14–15) and a per-parameter ξ (eq. 9).
+
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Core>
+
+#include "mjukf/detail/cholesky.hpp"
+#include "mjukf/detail/finite.hpp"
+#include "mjukf/measurement_gating.hpp"
+
+namespace mjukf {
+
+/// The sensitivities W = ∂x̂/∂θ̂ (n × p) and ψ = ∂ŷ/∂θ̂ (m × p), followed along the run as in a recursive
+/// prediction-error method: a time update maps W → A W + B (A = ∂Φ/∂x, B = ∂Φ/∂θ over the interval),
+/// a measurement update maps W → W − K ψ (the correction x̂ += K (y − ŷ) pulls the state towards the
+/// data, which removes part of its dependence on θ). Both derivatives are forward differences along
+/// the direction (W_r, e_r), one extra propagation per parameter.
+///
+/// Every step writes to candidates; commit*() makes them the state. Fixed sizes, no allocation.
+template <class Scalar, int N, int M, int P>
+class ParameterSensitivity {
+ public:
+  using State = Eigen::Matrix<Scalar, N, 1>;
+  using Meas = Eigen::Matrix<Scalar, M, 1>;
+  using Param = Eigen::Matrix<Scalar, P, 1>;
+  using StateSensitivity = Eigen::Matrix<Scalar, N, P>;
+  using MeasSensitivity = Eigen::Matrix<Scalar, M, P>;
+  using Information = Eigen::Matrix<Scalar, P, P>;
+  using Transformation = Eigen::Matrix<Scalar, P, M>;
+  using MeasMatrix = Eigen::Matrix<Scalar, M, M>;
+
+  /// Starts from an estimate that does not depend on θ (W = 0) and the prior information
+  /// diag(1 / scaleᵣ²): each parameter is known to about its scale.
+  void start(const Param& scale) {
+    scale_ = scale;
+    state_ = StateSensitivity::Zero();
+    measurement_ = MeasSensitivity::Zero();
+    information_ = Information::Zero();
+    information_.diagonal() = scale.array().square().inverse().matrix();
+    openLoopTime_ = sinceCorrection_ = Scalar(0);
+    candidateState_ = state_;
+  }
+  /// Keeps what is known about θ; the new state estimate does not depend on it (W = 0).
+  void restartState() {
+    state_ = StateSensitivity::Zero();
+    candidateState_ = state_;
+    openLoopTime_ = Scalar(0);
+  }
+
+  /// The finite-difference step for parameter r about θᵣ: √ε relative to max(|θᵣ|, its scale), the
+  /// step that balances truncation (∝ δ) and rounding (∝ ε / δ) of a forward difference.
+  Scalar step(const Param& theta, int r) const {
+    return std::sqrt(std::numeric_limits<Scalar>::epsilon()) * std::max(std::abs(theta(r)), scale_(r));
+  }
+
+  /// Time update over `interval` (after `openLoopTime()` of open-loop propagation since the last one):
+  /// from x₀ = x̂ with parameters θ₀ propagated to x₀⁺, `propagate(x, θ)` the same propagation. W⁻ is
+  /// W + (total / interval)(D − W) with D = A W + B measured over this interval alone: the change over
+  /// the open-loop steps is extrapolated from it, which is first-order right when the interval between
+  /// measurements is short against the dynamics. A non-finite D leaves W as it is.
+  template <class Propagate>
+  void predict(const State& x0, const Param& theta0, const State& x0Propagated, Scalar interval,
+               Propagate&& propagate) {
+    candidateState_ = state_;
+    const Scalar extrapolation = (openLoopTime_ + interval) / interval;
+    for (int r = 0; r < P; ++r) {
+      const Scalar delta = step(theta0, r);
+      Param theta = theta0;
+      theta(r) += delta;
+      const State perturbed = propagate(State(x0 + delta * state_.col(r)), theta);
+      const State d = (perturbed - x0Propagated) / delta;  // A Wᵣ + Bᵣ
+      if (detail::allFinite(d)) candidateState_.col(r) = state_.col(r) + extrapolation * (d - state_.col(r));
+    }
+    candidateInterval_ = interval;
+  }
+  void commitPrediction() {
+    state_ = candidateState_;
+    sinceCorrection_ += candidateInterval_;
+    openLoopTime_ = Scalar(0);
+  }
+  /// Skipped refresh: W stays; the time still counts.
+  void keepPrediction(Scalar interval) {
+    candidateState_ = state_;
+    candidateInterval_ = interval;
+  }
+  void commitOpenLoop(Scalar interval) {
+    openLoopTime_ += interval;
+    sinceCorrection_ += interval;
+  }
+
+  /// Measurement update about the prior (x̂⁻, θ̂), with g the model's measurement: ψ by forward
+  /// differences of g along (W⁻ᵣ, eᵣ), zero on missing components; W ← W⁻ − K ψ; the information
+  /// I ← λ I + ψᵀ P_yy⁻¹ ψ with the forgetting λ = exp(−Δt / memory), Δt the time since the last
+  /// correction. Returns false (candidates unspecified) when a result is not finite.
+  template <class Measure, class GainTransposed>
+  bool correct(const State& priorMean, const Param& theta, Measure&& measure, const GainTransposed& gainTransposed,
+               const MeasMatrix& innovationCovariance, Scalar memory, const MeasurementMask<M>* present) {
+    const Meas nominal = measure(priorMean, theta);
+    for (int r = 0; r < P; ++r) {
+      const Scalar delta = step(theta, r);
+      Param perturbed = theta;
+      perturbed(r) += delta;
+      candidateMeasurement_.col(r) = (measure(State(priorMean + delta * candidateState_.col(r)), perturbed) - nominal) / delta;
+    }
+    if (present)
+      for (int j = 0; j < M; ++j)
+        if (!(*present)(j)) candidateMeasurement_.row(j).setZero();
+    candidateState_.noalias() -= gainTransposed.transpose() * candidateMeasurement_;
+    MeasMatrix factor;
+    if (!detail::choleskyLower(innovationCovariance, factor)) return false;
+    whitened_ = factor.template triangularView<Eigen::Lower>().solve(candidateMeasurement_);  // S⁻¹ ψ
+    const Scalar forgetting = std::exp(-sinceCorrection_ / memory);
+    candidateInformation_ = forgetting * information_;
+    candidateInformation_.noalias() += whitened_.transpose() * whitened_;
+    factor_ = factor;
+    return detail::allFinite(candidateMeasurement_) && detail::allFinite(candidateState_) &&
+           detail::allFinite(candidateInformation_);
+  }
+  void commitCorrection() {
+    state_ = candidateState_;
+    measurement_ = candidateMeasurement_;
+    information_ = candidateInformation_;
+    sinceCorrection_ = Scalar(0);
+    openLoopTime_ = Scalar(0);
+  }
+
+  /// Eqs. 14–15 from the candidate ψ: Tᵣⱼ = ψ̃ⱼᵣ / Σⱼ |ψ̃ⱼᵣ| with ψ̃ⱼᵣ = ψⱼᵣ / √Rⱼⱼ, the sensitivity
+  /// in units of the measurement's noise. T keeps the sign of ψ, so with it ξ < 0 moves every parameter
+  /// towards the data; a row whose parameter moves no measurement is zero (that parameter stays).
+  void transformation(const MeasMatrix& measurementNoise, Transformation& t) const {
+    for (int r = 0; r < P; ++r) {
+      for (int j = 0; j < M; ++j) t(r, j) = candidateMeasurement_(j, r) / std::sqrt(measurementNoise(j, j));
+      const Scalar sum = t.row(r).cwiseAbs().sum();
+      if (sum > Scalar(0)) t.row(r) /= sum;
+      else t.row(r).setZero();
+    }
+  }
+
+  /// The adaptive ξ (docs/tuning-mjukf.md): the recursive least-squares gain G = I⁻¹ ψᵀ P_yy⁻¹ (p × m)
+  /// of the candidate information, and ξᵣ the least-squares fit of −ξᵣ Tᵣ to its row Gᵣ, so that eq. 9
+  /// with T moves θᵣ as G would, as far as T's row allows. ξᵣ = 0 for a zero row of T.
+  void scaling(const Transformation& t, Param& xi) {
+    gain_ = whitened_.transpose();
+    factor_.template triangularView<Eigen::Lower>().transpose().solveInPlace(gain_);  // ψᵀ P_yy⁻¹ as (S⁻ᵀ (S⁻¹ ψ))ᵀ
+    Information informationFactor;
+    if (!detail::choleskyLower(candidateInformation_, informationFactor)) {
+      xi.setZero();
+      return;
+    }
+    informationFactor.template triangularView<Eigen::Lower>().solveInPlace(gain_);
+    informationFactor.template triangularView<Eigen::Lower>().transpose().solveInPlace(gain_);
+    for (int r = 0; r < P; ++r) {
+      const Scalar norm = t.row(r).squaredNorm();
+      xi(r) = norm > Scalar(0) ? -gain_.row(r).dot(t.row(r)) / norm : Scalar(0);
+    }
+  }
+
+  const StateSensitivity& stateSensitivity() const { return state_; }
+  /// ψ = ∂ŷ/∂θ̂ of the last measurement update.
+  const MeasSensitivity& measurementSensitivity() const { return measurement_; }
+  const Information& information() const { return information_; }
+
+ private:
+  Param scale_ = Param::Ones();
+  StateSensitivity state_ = StateSensitivity::Zero();         // W
+  MeasSensitivity measurement_ = MeasSensitivity::Zero();     // ψ
+  Information information_ = Information::Identity();        // I
+  Scalar openLoopTime_ = 0;     // open-loop propagation since W was last predicted
+  Scalar sinceCorrection_ = 0;  // model time since the last measurement update
+  // Candidates and workspace.
+  StateSensitivity candidateState_ = StateSensitivity::Zero();
+  MeasSensitivity candidateMeasurement_ = MeasSensitivity::Zero();
+  Information candidateInformation_ = Information::Identity();
+  Scalar candidateInterval_ = 0;
+  MeasSensitivity whitened_;
+  MeasMatrix factor_;
+  Transformation gain_;
+};
+
+}  // namespace mjukf
