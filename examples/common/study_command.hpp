@@ -242,27 +242,30 @@ void runInParallel(std::size_t count, unsigned jobs, Work&& work, Progress&& pro
 inline std::string rmseColumn(const Quantity& q) { return std::string("rmse_") + q.name; }
 
 /// Box plots of each parameter's RMSE per filter in `scenario`, from the study's CSV, leaving out the
-/// diverged runs.
+/// diverged runs; a filter none of whose runs is left (`shown[f]` false) gets no box, as gnuplot
+/// refuses a plot without a point.
 template <class Plant>
 bool drawStudyPlot(Plotter& plotter, const std::string& png, const std::string& csv, const std::string& scenario,
-                   const std::vector<StudyFilter>& filters, int divergedColumn) {
+                   const std::vector<StudyFilter>& filters, const std::vector<bool>& shown, int divergedColumn) {
   constexpr int p = static_cast<int>(Plant::parameters.size());
-  std::string names, tics;
-  for (std::size_t f = 0; f < filters.size(); ++f) {
-    names += (f > 0 ? " " : "") + filters[f].name;
-    tics += format("%s\"%s\" %zu", f > 0 ? ", " : "", filters[f].name.c_str(), f + 1);
-  }
+  std::string tics;
+  for (std::size_t f = 0; f < filters.size(); ++f)
+    tics += format("%s\"%s%s\" %zu", f > 0 ? ", " : "", filters[f].name.c_str(), shown[f] ? "" : " (all diverged)", f + 1);
   std::string s = "set datafile separator ','\nset grid ytics\nset style fill solid 0.25 border -1\n";
   s += "set style boxplot outliers pointtype 7\nset style data boxplot\nset boxwidth 0.5\nunset key\n";
-  s += format("filters = \"%s\"\nset xtics (%s)\nset xrange [0.4:%zu.6]\n", names.c_str(), tics.c_str(), filters.size());
+  s += format("set xtics (%s)\nset xrange [0.4:%zu.6]\n", tics.c_str(), filters.size());
   s += format("set multiplot layout 1,%d title \"%s, %s: parameter RMSE per run over seeds (diverged runs left out)\" font ',12'\n",
               p, Plant::title, scenario.c_str());
   for (int i = 0; i < p; ++i) {
     const Quantity& q = Plant::parameters[std::size_t(i)];
     s += format("set title \"%s\"\nset ylabel \"RMSE %s (%s)\"\n", q.label, q.label, q.unit);
-    s += format("plot for [f=1:words(filters)] %s skip 1 using (f):((strcol(2) eq word(filters,f) && "
-                "strcol(3) eq \"%s\" && column(%d) == 0) ? column(%d) : NaN) lc f\n",
-                gnuplotQuote(csv).c_str(), scenario.c_str(), divergedColumn, 4 + i);
+    std::string plot;
+    for (std::size_t f = 0; f < filters.size(); ++f)
+      if (shown[f])
+        plot += format("%s%s skip 1 using (%zu):((strcol(2) eq \"%s\" && strcol(3) eq \"%s\" && column(%d) == 0) ? column(%d) : NaN) lc %zu",
+                       plot.empty() ? "plot " : ", \\\n     ", gnuplotQuote(csv).c_str(), f + 1, filters[f].name.c_str(),
+                       scenario.c_str(), divergedColumn, 4 + i, f + 1);
+    s += (plot.empty() ? "set yrange [0:1]\nplot 2 notitle" : plot) + "\n";
   }
   s += "unset multiplot\n";
   return plotter.drawScript(png, 420 * p + 100, 500, {&csv}, s);
@@ -383,6 +386,7 @@ int studyCommand(const std::vector<std::string>& words) {
     for (const auto& q : Plant::parameters)
       head += format(" %-30s %-11s", ("RMSE " + std::string(q.name) + " mean +- sd").c_str(), "median");
     say(head + " diverged");
+    std::vector<bool> shown;  // whether the filter has a run that did not diverge, for the box plot
     for (std::size_t f = 0; f < filters.size(); ++f) {
       std::string line = format("%-11s", filters[f].name.c_str());
       long diverged = 0;
@@ -399,9 +403,10 @@ int studyCommand(const std::vector<std::string>& words) {
                                         detail::median(values));
       }
       say(line + format(" %ld/%zu", diverged, seeds.size()));
+      shown.push_back(diverged < long(seeds.size()));
     }
     const std::string png = path("study_" + scenarios[s].name + ".png");
-    if (detail::drawStudyPlot<Plant>(plotter, png, csvPath, scenarios[s].name, filters, divergedColumn))
+    if (detail::drawStudyPlot<Plant>(plotter, png, csvPath, scenarios[s].name, filters, shown, divergedColumn))
       written.push_back(png);
   }
   report.finish(path("study_table.txt"), written);
