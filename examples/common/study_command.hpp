@@ -358,7 +358,7 @@ int studyCommand(const std::vector<std::string>& words) {
     for (std::size_t r = 0; r < runs; ++r)
       for (std::size_t f = 0; f < filters.size(); ++f) {
         const auto& result = results[r][f];
-        csv << double(seeds[r % seeds.size()]) << filters[f].name << scenarios[r / seeds.size()].name;
+        csv << std::to_string(seeds[r % seeds.size()]) << filters[f].name << scenarios[r / seeds.size()].name;
         for (double v : result.rmse) csv << v;
         csv << double(result.diverged) << std::string(toString(result.status)) << double(result.stoppedAtRow)
             << double(result.repairs) << double(result.rejected);

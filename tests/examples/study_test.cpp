@@ -78,6 +78,17 @@ TEST(Study, VanDerPolCsvIsTheSameForOneAndTwoJobs) {
   EXPECT_EQ(lines(one).size(), 1u + 5 * 3);
 }
 
+// MJUKF automatic is offered (MJUKF's settings have the automatic modes) and is the default's third
+// filter; on Van der Pol it runs and is scored like the others.
+TEST(Study, OffersMjukfAutomaticByDefault) {
+  const std::string dir = scratch("out");
+  const Result r = run(kVanDerPol + " study --seeds 1-2 --out-dir " + shellQuote(dir));
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_TRUE(std::regex_search(r.output, std::regex("\nmjukf-auto +([-0-9.e]+ \\+- [-0-9.e]+ +[-0-9.e]+|- +-) +[0-2]/2\n")))
+      << r.output;
+  EXPECT_NE(run(kVanDerPol + " --help").output.find("mjukf-auto"), std::string::npos);
+}
+
 // The table on stdout names every filter with its diverged count, and the files are written.
 TEST(Study, PrintsTheTableAndWritesItsFiles) {
   const std::string dir = scratch("out");
