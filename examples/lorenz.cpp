@@ -20,7 +20,6 @@ struct LorenzPlant {
   static constexpr const char* title = "Lorenz system (2019 MJUKF paper)";
   static constexpr const char* slug = "lorenz";
   static constexpr const char* simulation = "as the 2019 paper: RK4, h = 0.01 s, 100 s, noise std 0.1 |x_i|";
-  static constexpr std::array<Quantity, 3> states{{{"x1", "x_1", "-"}, {"x2", "x_2", "-"}, {"x3", "x_3", "-"}}};
   static constexpr std::array<Quantity, 3> parameters{{{"sigma", "σ", "-"}, {"rho", "ρ", "-"}, {"beta", "β", "-"}}};
   static std::optional<ParameterChange<Param>> parameterChange() { return std::nullopt; }
 };

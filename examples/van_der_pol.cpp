@@ -20,7 +20,6 @@ struct VanDerPolPlant {
   static constexpr const char* title = "Van der Pol oscillator (2019 MJUKF paper)";
   static constexpr const char* slug = "van_der_pol";
   static constexpr const char* simulation = "as the 2019 paper: RK4, h = 0.1 s, 100 s, noise std 0.1 |x_i|";
-  static constexpr std::array<Quantity, 2> states{{{"x1", "x_1", "-"}, {"x2", "x_2", "-"}}};
   static constexpr std::array<Quantity, 1> parameters{{{"mu", "μ", "-"}}};
   static std::optional<ParameterChange<Param>> parameterChange() { return std::nullopt; }
 };

@@ -11,12 +11,12 @@
 //   static constexpr const char* title;                     // "Coupled tank"
 //   static constexpr const char* slug;                      // "coupled_tank", for file names
 //   static constexpr const char* simulation;                // how `simulate` makes data, for the usage
-//   static constexpr std::array<Quantity, StateDim> states;
 //   static constexpr std::array<Quantity, ParamDim> parameters;
 //   static std::optional<ParameterChange<Param>> parameterChange();
 //
 // and, for the paper's plants only (the `paper` subcommand exists where they are given):
 //
+//   static constexpr std::array<Quantity, StateDim> states;  // for the state figures
 //   static constexpr const char* table;                     // "Table 3"
 //   static constexpr PaperNumbers<ParamDim> published;       // paper's table (Python, HP Z420, mean of 20)
 //   static constexpr PaperNumbers<ParamDim> reference;       // conformance RMSEs; reference scripts' times
