@@ -96,6 +96,18 @@ struct DiscreteCase {
   }
 };
 
+// `Base`'s MJUKF with both automatic modes on (T from the sensitivities, adaptive ξ).
+template <class Base>
+struct Automatic {
+  static auto make() {
+    const auto paper = Base::make();
+    auto s = paper.settings();
+    s.automaticTransformation = true;
+    s.adaptiveScaling = true;
+    return std::decay_t<decltype(paper)>(paper.model(), paper.state(), paper.parameters(), s);
+  }
+};
+
 using Robot = mjukf::paper::FlexibleJointExperiment<double>;
 using Tank = mjukf::paper::CoupledTankExperiment<double>;
 using RobotF = mjukf::paper::FlexibleJointExperiment<float>;
@@ -110,7 +122,12 @@ using Cases = ::testing::Types<Case<mjukf::Ukf, Robot>, Case<mjukf::JointUkf, Ro
                                DiscreteCase<mjukf::Ukf, double>, DiscreteCase<mjukf::JointUkf, double>,
                                DiscreteCase<mjukf::ModifiedJointUkf, double>, DiscreteCase<mjukf::DualUkf, double>,
                                DiscreteCase<mjukf::DualUkf, double, kUpdated>,
-                               DiscreteCase<mjukf::ModifiedJointUkf, float>>;
+                               DiscreteCase<mjukf::ModifiedJointUkf, float>,
+                               Automatic<Case<mjukf::ModifiedJointUkf, Robot>>,
+                               Automatic<Case<mjukf::ModifiedJointUkf, Tank>>,
+                               Automatic<Case<mjukf::ModifiedJointUkf, RobotF>>,
+                               Automatic<DiscreteCase<mjukf::ModifiedJointUkf, double>>,
+                               Automatic<DiscreteCase<mjukf::ModifiedJointUkf, float>>>;
 TYPED_TEST_SUITE(NoAllocation, Cases);
 
 TYPED_TEST(NoAllocation, EveryPerStepCall) {
