@@ -81,6 +81,10 @@ ModifiedJointUkfSettings<To> rebind(const ModifiedJointUkfSettings<From>& s) {
   r.scaling = s.scaling;
   r.transformation = s.transformation;
   r.parameterSpread = s.parameterSpread;
+  r.automaticTransformation = s.automaticTransformation;
+  r.adaptiveScaling = s.adaptiveScaling;
+  r.convergenceTime = s.convergenceTime;
+  r.sensitivityInterval = s.sensitivityInterval;
   return r;
 }
 

@@ -110,6 +110,36 @@ struct DualFilter {
   }
 };
 
+// MJUKF with both automatic modes (T from the sensitivities, adaptive ξ; docs/tuning-mjukf.md) and
+// the paper's other settings. Its floor adds the p propagations of the sensitivities' forward
+// differences to the 2n + 1 of the points.
+template <class Experiment_>
+struct AutomaticMjukfFilter {
+  using Experiment = Experiment_;
+  using Model = typename Experiment::Model;
+  using Paper = PaperFilter<FilterKind::Mjukf, Experiment>;
+  static constexpr int points = Paper::points + Model::ParamDim;
+  static const char* name() { return "mjukf_auto"; }
+  template <class M = Model>
+  static ModifiedJointUkf<M> make(const M& model = M()) {
+    auto settings = rebind<M>(Experiment::modifiedJointUkf());
+    settings.automaticTransformation = true;
+    settings.adaptiveScaling = true;
+    return ModifiedJointUkf<M>(model, Experiment::initialState(), Experiment::initialParameters(), settings);
+  }
+  static FloorPoints<Experiment, points> floorPoints(const typename Model::State& centre) {
+    const auto paper = Paper::floorPoints(centre);
+    FloorPoints<Experiment, points> f;
+    f.start.leftCols(Paper::points) = paper.start;
+    f.theta.leftCols(Paper::points) = paper.theta;
+    for (int r = 0; r < Model::ParamDim; ++r) {  // x̂ + δ Wᵣ with θ₀ + δ eᵣ
+      f.start.col(Paper::points + r) = centre + Model::State::Constant(1e-6);
+      f.theta.col(Paper::points + r) = paper.theta.col(0) + 1e-6 * Model::Param::Unit(r);
+    }
+    return f;
+  }
+};
+
 // Evaluations of the derivative and the input in one measurement step, after a few steps to settle.
 template <class Filter>
 EvaluationCounts countEvaluations(bool measurementStep) {
@@ -246,6 +276,7 @@ void registerPlant() {
   registerFilter<PaperFilter<FilterKind::Ukf, Experiment>>();
   registerFilter<PaperFilter<FilterKind::Jukf, Experiment>>();
   registerFilter<PaperFilter<FilterKind::Mjukf, Experiment>>();
+  registerFilter<AutomaticMjukfFilter<Experiment>>();
   registerFilter<DualFilter<Experiment>>();
 }
 

@@ -97,6 +97,18 @@ struct DiscreteCase {
   }
 };
 
+// `Base`'s MJUKF with both automatic modes on (T from the sensitivities, adaptive ξ).
+template <class Base>
+struct Automatic {
+  static auto make() {
+    const auto paper = Base::make();
+    auto s = paper.settings();
+    s.automaticTransformation = true;
+    s.adaptiveScaling = true;
+    return std::decay_t<decltype(paper)>(paper.model(), paper.state(), paper.parameters(), s);
+  }
+};
+
 // issue 10 (part A): the 2019 MJUKF paper's systems, with their integrator (RK4) and no input.
 template <template <class, class> class F, class E>
 struct Case2019 {
@@ -125,7 +137,14 @@ using Cases = ::testing::Types<Case<mjukf::Ukf, Robot>, Case<mjukf::JointUkf, Ro
                                DiscreteCase<mjukf::ModifiedJointUkf, float>,
                                Case2019<mjukf::JointUkf, VanDerPol>, Case2019<mjukf::ModifiedJointUkf, VanDerPol>,
                                Case2019<mjukf::DualUkf, VanDerPol>, Case2019<mjukf::JointUkf, Lorenz>,
-                               Case2019<mjukf::ModifiedJointUkf, Lorenz>>;
+                               Case2019<mjukf::ModifiedJointUkf, Lorenz>,
+                               Automatic<Case<mjukf::ModifiedJointUkf, Robot>>,
+                               Automatic<Case<mjukf::ModifiedJointUkf, Tank>>,
+                               Automatic<Case<mjukf::ModifiedJointUkf, RobotF>>,
+                               Automatic<DiscreteCase<mjukf::ModifiedJointUkf, double>>,
+                               Automatic<DiscreteCase<mjukf::ModifiedJointUkf, float>>,
+                               Automatic<Case2019<mjukf::ModifiedJointUkf, VanDerPol>>,
+                               Automatic<Case2019<mjukf::ModifiedJointUkf, Lorenz>>>;
 TYPED_TEST_SUITE(NoAllocation, Cases);
 
 TYPED_TEST(NoAllocation, EveryPerStepCall) {

@@ -47,8 +47,10 @@ struct ModifiedJointUkfSettings
   bool adaptiveScaling = false;
   /// With `adaptiveScaling`: the memory of the parameter estimate in seconds of model time, i.e. the
   /// time over which the parameters are taken as constant. A change of the true parameters is tracked
-  /// with about this time constant; a longer memory averages more noise out. Must be > 0.
-  Scalar convergenceTime = Scalar(1);
+  /// with about this time constant; a longer memory averages more noise out. Must be > 0. The default
+  /// served the tank, the robot (with its parameter change), Van der Pol and Lorenz alike
+  /// (docs/tuning-mjukf.md).
+  Scalar convergenceTime = Scalar(5);
   /// With either automatic mode: the sensitivities are recomputed at every `sensitivityInterval`-th
   /// time update (p extra propagations each) and kept in between; 0: once, at the first time update.
   int sensitivityInterval = 1;
@@ -113,10 +115,9 @@ class ModifiedJointUkf
   Param scalings() const {
     return this->settings_.adaptiveScaling ? scalings_ : Param::Constant(this->settings_.scaling);
   }
-  /// ψ = ∂ŷ/∂θ̂ at the last measurement update (m × p), with either automatic mode; zero otherwise.
-  const typename Sensitivity::MeasSensitivity& parameterSensitivity() const {
-    return sensitivity_.measurementSensitivity();
-  }
+  /// What the automatic modes know (W = ∂x̂/∂θ̂, ψ = ∂ŷ/∂θ̂ of the last update, the information about
+  /// θ); not followed, and zero, when neither mode is on.
+  const Sensitivity& sensitivity() const { return sensitivity_; }
 
   /// Starts again from (state, covariance), keeping θ̂ and the θᵢ. Throws std::invalid_argument naming
   /// the argument, and changes nothing, when one is not finite or the covariance is not symmetric
@@ -166,7 +167,7 @@ class ModifiedJointUkf
     Param scale = center.cwiseAbs().cwiseMax(s.parameterSpread.cwiseAbs() * Scalar(StateDim + 1));
     for (int r = 0; r < ParamDim; ++r)
       if (!(scale(r) > Scalar(0))) scale(r) = Scalar(1);
-    sensitivity_.start(scale);
+    sensitivity_.start(scale, s.measurementNoise);
     timeUpdates_ = 0;
     transformation_.setZero();
     scalings_.setZero();
@@ -255,15 +256,15 @@ class ModifiedJointUkf
     const Scalar memory = s.adaptiveScaling ? s.convergenceTime : std::numeric_limits<Scalar>::infinity();
     const auto measure = [this](const State& x, const Param& theta) { return this->model_.measurement(x, theta); };
     if (!sensitivity_.correct(state(), parameters_, measure, this->core_.candidateGainTransposed(),
-                              this->core_.candidateDiagnostics().innovationCovariance, memory, present))
+                              this->core_.candidateInnovationFactor(), memory, present))
       return Status::NonFiniteResult;
     if (s.automaticTransformation) {
-      sensitivity_.transformation(s.measurementNoise, candidateTransformation_);
+      sensitivity_.transformation(candidateTransformation_);
     } else {
       if (present) reducedTransformation(*present);
       candidateTransformation_ = present ? maskedTransformation_ : s.transformation;
     }
-    if (s.adaptiveScaling) sensitivity_.scaling(candidateTransformation_, candidateScalings_);
+    if (s.adaptiveScaling) sensitivity_.scaling(candidateTransformation_, this->core_.candidateInnovationFactor(), candidateScalings_);
     else candidateScalings_.setConstant(s.scaling);
     const auto& measured = this->core_.measuredPoints();
     for (int i = 0; i < SigmaPointCount; ++i) {  // eq. 9

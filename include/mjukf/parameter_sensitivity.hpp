@@ -36,15 +36,17 @@ class ParameterSensitivity {
   using MeasMatrix = Eigen::Matrix<Scalar, M, M>;
 
   /// Starts from an estimate that does not depend on θ (W = 0) and the prior information
-  /// diag(1 / scaleᵣ²): each parameter is known to about its scale.
-  void start(const Param& scale) {
+  /// diag(1 / scaleᵣ²): each parameter is known to about its scale. R weighs the measurements in T.
+  void start(const Param& scale, const MeasMatrix& measurementNoise) {
     scale_ = scale;
+    noiseWeights_ = measurementNoise.diagonal().cwiseSqrt().cwiseInverse();
     state_ = StateSensitivity::Zero();
     measurement_ = MeasSensitivity::Zero();
     information_ = Information::Zero();
     information_.diagonal() = scale.array().square().inverse().matrix();
     openLoopTime_ = sinceCorrection_ = Scalar(0);
     candidateState_ = state_;
+    stale_ = false;
   }
   /// Keeps what is known about θ; the new state estimate does not depend on it (W = 0).
   void restartState() {
@@ -53,10 +55,19 @@ class ParameterSensitivity {
     openLoopTime_ = Scalar(0);
   }
 
-  /// The finite-difference step for parameter r about θᵣ: √ε relative to max(|θᵣ|, its scale), the
-  /// step that balances truncation (∝ δ) and rounding (∝ ε / δ) of a forward difference.
-  Scalar step(const Param& theta, int r) const {
-    return std::sqrt(std::numeric_limits<Scalar>::epsilon()) * std::max(std::abs(theta(r)), scale_(r));
+  /// The forward-difference step δ along (Wᵣ, eᵣ) about θ, for an output of size `output` (max norm):
+  /// the step that makes the output move by √ε of its size, δ = √ε ‖output‖ / ‖Wᵣ‖ (W ≈ the derivative
+  /// being taken), so that the rounding of the difference, ε ‖output‖ / δ, stays √ε relative to the
+  /// derivative; kept between √ε and 1 times max(|θᵣ|, its scale). In double that is 1.5e-8 relative at
+  /// least; in float (√ε = 3.5e-4) the upper end matters: the tank's one-interval sensitivity
+  /// (3e-4 cm per unit of k_flow) against levels of 5 cm asks for δ ≈ 6, capped at |θ|. The models this
+  /// filter is meant for are linear in θ, so a large δ costs little truncation.
+  Scalar step(const Param& theta, int r, Scalar output) const {
+    const Scalar root = std::sqrt(std::numeric_limits<Scalar>::epsilon());
+    const Scalar base = std::max(std::abs(theta(r)), scale_(r));
+    const Scalar derivative = candidateState_.col(r).cwiseAbs().maxCoeff();
+    const Scalar wanted = derivative > Scalar(0) ? output / derivative : Scalar(0);
+    return root * std::max(base, std::min(wanted, base / root));
   }
 
   /// Time update over `interval` (after `openLoopTime()` of open-loop propagation since the last one):
@@ -69,8 +80,9 @@ class ParameterSensitivity {
                Propagate&& propagate) {
     candidateState_ = state_;
     const Scalar extrapolation = (openLoopTime_ + interval) / interval;
+    const Scalar output = x0Propagated.cwiseAbs().maxCoeff();
     for (int r = 0; r < P; ++r) {
-      const Scalar delta = step(theta0, r);
+      const Scalar delta = step(theta0, r, output);
       Param theta = theta0;
       theta(r) += delta;
       const State perturbed = propagate(State(x0 + delta * state_.col(r)), theta);
@@ -78,16 +90,20 @@ class ParameterSensitivity {
       if (detail::allFinite(d)) candidateState_.col(r) = state_.col(r) + extrapolation * (d - state_.col(r));
     }
     candidateInterval_ = interval;
+    candidateStale_ = false;
+  }
+  /// A time update without a refresh: W and ψ stay as they are (the next measurement update reuses ψ);
+  /// the interval counts towards the next refresh's extrapolation.
+  void keepPrediction(Scalar interval) {
+    candidateState_ = state_;
+    candidateInterval_ = interval;
+    candidateStale_ = true;
   }
   void commitPrediction() {
     state_ = candidateState_;
     sinceCorrection_ += candidateInterval_;
-    openLoopTime_ = Scalar(0);
-  }
-  /// Skipped refresh: W stays; the time still counts.
-  void keepPrediction(Scalar interval) {
-    candidateState_ = state_;
-    candidateInterval_ = interval;
+    openLoopTime_ = candidateStale_ ? openLoopTime_ + candidateInterval_ : Scalar(0);
+    stale_ = candidateStale_;
   }
   void commitOpenLoop(Scalar interval) {
     openLoopTime_ += interval;
@@ -97,45 +113,54 @@ class ParameterSensitivity {
   /// Measurement update about the prior (x̂⁻, θ̂), with g the model's measurement: ψ by forward
   /// differences of g along (W⁻ᵣ, eᵣ), zero on missing components; W ← W⁻ − K ψ; the information
   /// I ← λ I + ψᵀ P_yy⁻¹ ψ with the forgetting λ = exp(−Δt / memory), Δt the time since the last
-  /// correction. Returns false (candidates unspecified) when a result is not finite.
+  /// correction. `innovationFactor` is the lower Cholesky factor S of P_yy. Returns false (candidates
+  /// unspecified) when a result is not finite.
   template <class Measure, class GainTransposed>
   bool correct(const State& priorMean, const Param& theta, Measure&& measure, const GainTransposed& gainTransposed,
-               const MeasMatrix& innovationCovariance, Scalar memory, const MeasurementMask<M>* present) {
-    const Meas nominal = measure(priorMean, theta);
-    for (int r = 0; r < P; ++r) {
-      const Scalar delta = step(theta, r);
-      Param perturbed = theta;
-      perturbed(r) += delta;
-      candidateMeasurement_.col(r) = (measure(State(priorMean + delta * candidateState_.col(r)), perturbed) - nominal) / delta;
+               const MeasMatrix& innovationFactor, Scalar memory, const MeasurementMask<M>* present) {
+    candidateState_ = state_;
+    if (stale_) {
+      candidateMeasurement_ = measurement_;
+    } else {
+      const Meas nominal = measure(priorMean, theta);
+      const Scalar output = nominal.cwiseAbs().maxCoeff();
+      for (int r = 0; r < P; ++r) {
+        const Scalar delta = step(theta, r, output);
+        Param perturbed = theta;
+        perturbed(r) += delta;
+        candidateMeasurement_.col(r) =
+            (measure(State(priorMean + delta * state_.col(r)), perturbed) - nominal) / delta;
+      }
+      candidateState_.noalias() -= gainTransposed.transpose() * candidateMeasurement_;
     }
     if (present)
       for (int j = 0; j < M; ++j)
         if (!(*present)(j)) candidateMeasurement_.row(j).setZero();
-    candidateState_.noalias() -= gainTransposed.transpose() * candidateMeasurement_;
-    MeasMatrix factor;
-    if (!detail::choleskyLower(innovationCovariance, factor)) return false;
-    whitened_ = factor.template triangularView<Eigen::Lower>().solve(candidateMeasurement_);  // S⁻¹ ψ
-    const Scalar forgetting = std::exp(-sinceCorrection_ / memory);
-    candidateInformation_ = forgetting * information_;
+    whitened_ = innovationFactor.template triangularView<Eigen::Lower>().solve(candidateMeasurement_);  // S⁻¹ ψ
+    if (sinceCorrection_ != forgettingInterval_ || memory != forgettingMemory_) {  // exp once per schedule
+      forgettingInterval_ = sinceCorrection_;
+      forgettingMemory_ = memory;
+      forgetting_ = std::exp(-sinceCorrection_ / memory);
+    }
+    candidateInformation_ = forgetting_ * information_;
     candidateInformation_.noalias() += whitened_.transpose() * whitened_;
-    factor_ = factor;
     return detail::allFinite(candidateMeasurement_) && detail::allFinite(candidateState_) &&
            detail::allFinite(candidateInformation_);
   }
   void commitCorrection() {
     state_ = candidateState_;
-    measurement_ = candidateMeasurement_;
+    if (!stale_) measurement_ = candidateMeasurement_;
     information_ = candidateInformation_;
     sinceCorrection_ = Scalar(0);
-    openLoopTime_ = Scalar(0);
+    if (!stale_) openLoopTime_ = Scalar(0);
   }
 
   /// Eqs. 14–15 from the candidate ψ: Tᵣⱼ = ψ̃ⱼᵣ / Σⱼ |ψ̃ⱼᵣ| with ψ̃ⱼᵣ = ψⱼᵣ / √Rⱼⱼ, the sensitivity
   /// in units of the measurement's noise. T keeps the sign of ψ, so with it ξ < 0 moves every parameter
   /// towards the data; a row whose parameter moves no measurement is zero (that parameter stays).
-  void transformation(const MeasMatrix& measurementNoise, Transformation& t) const {
+  void transformation(Transformation& t) const {
     for (int r = 0; r < P; ++r) {
-      for (int j = 0; j < M; ++j) t(r, j) = candidateMeasurement_(j, r) / std::sqrt(measurementNoise(j, j));
+      for (int j = 0; j < M; ++j) t(r, j) = candidateMeasurement_(j, r) * noiseWeights_(j);
       const Scalar sum = t.row(r).cwiseAbs().sum();
       if (sum > Scalar(0)) t.row(r) /= sum;
       else t.row(r).setZero();
@@ -145,9 +170,10 @@ class ParameterSensitivity {
   /// The adaptive ξ (docs/tuning-mjukf.md): the recursive least-squares gain G = I⁻¹ ψᵀ P_yy⁻¹ (p × m)
   /// of the candidate information, and ξᵣ the least-squares fit of −ξᵣ Tᵣ to its row Gᵣ, so that eq. 9
   /// with T moves θᵣ as G would, as far as T's row allows. ξᵣ = 0 for a zero row of T.
-  void scaling(const Transformation& t, Param& xi) {
-    gain_ = whitened_.transpose();
-    factor_.template triangularView<Eigen::Lower>().transpose().solveInPlace(gain_);  // ψᵀ P_yy⁻¹ as (S⁻ᵀ (S⁻¹ ψ))ᵀ
+  void scaling(const Transformation& t, const MeasMatrix& innovationFactor, Param& xi) {
+    MeasSensitivity solved = whitened_;
+    innovationFactor.template triangularView<Eigen::Lower>().transpose().solveInPlace(solved);  // P_yy⁻¹ ψ = S⁻ᵀ (S⁻¹ ψ)
+    gain_ = solved.transpose();
     Information informationFactor;
     if (!detail::choleskyLower(candidateInformation_, informationFactor)) {
       xi.setZero();
@@ -178,8 +204,11 @@ class ParameterSensitivity {
   MeasSensitivity candidateMeasurement_ = MeasSensitivity::Zero();
   Information candidateInformation_ = Information::Identity();
   Scalar candidateInterval_ = 0;
+  bool stale_ = false;           // the last time update did not refresh W: reuse ψ
+  bool candidateStale_ = false;
+  Meas noiseWeights_ = Meas::Ones();  // 1 / √Rⱼⱼ
+  Scalar forgettingInterval_ = -1, forgettingMemory_ = -1, forgetting_ = 1;  // λ of the last interval
   MeasSensitivity whitened_;
-  MeasMatrix factor_;
   Transformation gain_;
 };
 
