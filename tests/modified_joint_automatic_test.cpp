@@ -34,18 +34,18 @@ Settings automatic(Settings s) {
   return s;
 }
 
-// y_k = x_k + white noise of standard deviation `noise` per component, x from `simulate` with
+// y_k = x_k + white noise of standard deviation `noise` per component (none for 0), x from `simulate` with
 // `parameterAt(k)`; the truth θ_k beside it.
 template <class Model, class Integrator, class ParameterAt>
 void simulateNoisy(const Model& model, const Integrator& integrator, const typename Model::State& x0,
                    ParameterAt&& parameterAt, double h, long steps, double noise, std::vector<typename Model::Meas>& y,
                    std::vector<typename Model::Param>& truth) {
   std::mt19937_64 random(7);
-  std::normal_distribution<double> normal(0.0, noise);
+  std::normal_distribution<double> normal(0.0, 1.0);
   y.resize(static_cast<std::size_t>(steps + 1));
   truth.resize(y.size());
   mjukf::simulate(model, integrator, x0, parameterAt, 0.0, h, steps, [&](long k, double, const auto& x) {
-    for (int j = 0; j < Model::MeasDim; ++j) y[static_cast<std::size_t>(k)](j) = x(j) + normal(random);
+    for (int j = 0; j < Model::MeasDim; ++j) y[static_cast<std::size_t>(k)](j) = x(j) + (noise > 0 ? noise * normal(random) : 0.0);
     truth[static_cast<std::size_t>(k)] = parameterAt(k);
   });
 }
@@ -108,6 +108,35 @@ TEST(AutomaticTransformation, EqualsTheAnalyticOneOnTheTank) {
   EXPECT_NEAR(filter.transformation()(0, 1), expectedT(1), tTolerance);
   EXPECT_NEAR(filter.transformation().row(0).sum(), 1.0, tTolerance);  // both sensitivities positive
   EXPECT_DOUBLE_EQ(filter.scalings()(0), -1.0);                          // adaptiveScaling off: the setting
+}
+
+// The sign convention (docs/tuning-mjukf.md): eq. 9 moves θ̂ by −ξ T (y − Ȳ), and y − Ȳ ≈ ψ (θ − θ̂)
+// with ψ = ∂ŷ/∂θ̂, so θ̂ approaches θ when ξ (T ψ) < 0. On the tank T = [0.8 0.2] ≥ 0 and ψ > 0 (a larger
+// k_flow fills the tanks faster): ξ = −1 (the paper's) must approach the truth from k̂ = 2, ξ = +1 must
+// move away from it. Noise-free data, 20 s.
+TEST(ScalingSign, NegativeXiForAMeasurementThatRisesWithTheParameter) {
+  const Tank::Model model;
+  const double h = Tank::stepSize;
+  const long steps = 20000;
+  std::vector<Tank::Model::Meas> y;
+  std::vector<Tank::Param> truth;
+  simulateNoisy(model, mjukf::ITrBdf2<double>(), Tank::initialState(), [](long) { return Tank::Model::trueParameters(); },
+                h, steps, 0.0, y, truth);
+  const auto finalError = [&](double xi) {
+    auto s = Tank::modifiedJointUkf();
+    s.scaling = xi;
+    mjukf::ModifiedJointUkf<Tank::Model> filter(model, Tank::initialState(), Tank::initialParameters(), s);
+    const auto outcome = mjukf::paper::runSchedule(
+        filter, steps + 1, h, Tank::measurementEvery,
+        [&](long k) -> const Tank::Model::Meas& { return y[static_cast<std::size_t>(k)]; }, [](long, const auto&) {});
+    return outcome.status == Status::Ok ? std::abs(filter.parameters()(0) - 6.0)
+                                        : std::numeric_limits<double>::infinity();
+  };
+  const double start = std::abs(Tank::initialParameters()(0) - 6.0);  // 4
+  const double negative = finalError(-1.0), positive = finalError(+1.0);
+  std::printf("|k - 6| after 20 s: xi = -1: %.3g, xi = +1: %.3g (start %.3g)\n", negative, positive, start);
+  EXPECT_LT(negative, 0.1 * start);
+  EXPECT_GT(positive, start);
 }
 
 // Van der Pol (the 2019 paper's case): from μ̂₀ = 5 against μ = 0.2, noise 0.1 on both states. The

@@ -29,9 +29,10 @@ struct ModifiedJointUkfSettings
   using StateMatrix = Eigen::Matrix<Scalar, Model::StateDim, Model::StateDim>;
   using Param = typename Model::Param;
   using Transformation = Eigen::Matrix<Scalar, Model::ParamDim, Model::MeasDim>;
-  /// ξ, the scaling parameter of eq. 9: with θᵢ ← θ̂ − ξ T (y − Yᵢ), a negative ξ moves a parameter up
-  /// when the measurements it raises are above their prediction (docs/algorithms.md §5: the tank's
-  /// ∂y/∂k_flow > 0 takes ξ = −1). Too large diverges, too small converges slowly.
+  /// ξ, the scaling parameter of eq. 9, θᵢ ← θ̂ − ξ T (y − Yᵢ). Sign: θ̂ approaches the truth when
+  /// ξ (T ψ)ᵣᵣ < 0 for each parameter r, ψ = ∂ŷ/∂θ̂ through the dynamics; with T ≥ 0, ξ is negative
+  /// when the measurements rise with the parameter (the tank's ∂y/∂k_flow > 0 takes ξ = −1; ξ = +1
+  /// diverges). Too large diverges, too small converges slowly (docs/tuning-mjukf.md).
   Scalar scaling = 0;
   /// T of eq. 9 (p × m): how much each measurement's error moves each parameter. Each row sums to 1.
   Transformation transformation = Transformation::Zero();
