@@ -91,6 +91,10 @@ ModifiedJointUkfSettings<To> rebind(const ModifiedJointUkfSettings<From>& s) {
   r.scaling = s.scaling;
   r.transformation = s.transformation;
   r.parameterSpread = s.parameterSpread;
+  r.automaticTransformation = s.automaticTransformation;
+  r.adaptiveScaling = s.adaptiveScaling;
+  r.convergenceTime = s.convergenceTime;
+  r.sensitivityInterval = s.sensitivityInterval;
   return r;
 }
 
@@ -108,15 +112,17 @@ DualUkfSettings<To> rebind(const DualUkfSettings<From>& s) {
   return r;
 }
 
-/// ukf, jukf, mjukf: the paper's settings; dual: the dual UKF with the library's settings
-/// (Experiment::dualUkf(), PriorParameters ordering; the paper runs none).
-enum class FilterKind { Ukf, Jukf, Mjukf, Dual };
+/// ukf, jukf, mjukf: the paper's settings; mjukf_auto: MJUKF with both automatic modes (T from the
+/// sensitivities, adaptive ξ; docs/tuning-mjukf.md) and the paper's other settings; dual: the dual UKF
+/// with the library's settings (Experiment::dualUkf(), PriorParameters ordering; the paper runs none).
+enum class FilterKind { Ukf, Jukf, Mjukf, MjukfAuto, Dual };
 
 inline const char* filterName(FilterKind kind) {
   switch (kind) {
     case FilterKind::Ukf: return "ukf";
     case FilterKind::Jukf: return "jukf";
     case FilterKind::Mjukf: return "mjukf";
+    case FilterKind::MjukfAuto: return "mjukf_auto";
     case FilterKind::Dual: return "dual";
   }
   return "?";
@@ -126,7 +132,8 @@ template <FilterKind Kind, class Model>
 using FilterType = std::conditional_t<
     Kind == FilterKind::Ukf, Ukf<Model>,
     std::conditional_t<Kind == FilterKind::Jukf, JointUkf<Model>,
-                       std::conditional_t<Kind == FilterKind::Mjukf, ModifiedJointUkf<Model>, DualUkf<Model>>>>;
+                       std::conditional_t<Kind == FilterKind::Mjukf || Kind == FilterKind::MjukfAuto,
+                                          ModifiedJointUkf<Model>, DualUkf<Model>>>>;
 
 /// The filter of kind `Kind` with the settings of `Experiment`, on `model` (the plant's model or a
 /// counting wrapper of it). The UKF is given the true parameters, the others the first guess.
@@ -142,6 +149,12 @@ FilterType<Kind, Model> makeFilter(const Model& model = Model()) {
   else if constexpr (Kind == FilterKind::Mjukf)
     return FilterType<Kind, Model>(model, x0, Experiment::initialParameters(),
                                    rebind<Model>(Experiment::modifiedJointUkf()));
+  else if constexpr (Kind == FilterKind::MjukfAuto) {
+    auto settings = rebind<Model>(Experiment::modifiedJointUkf());
+    settings.automaticTransformation = true;
+    settings.adaptiveScaling = true;
+    return FilterType<Kind, Model>(model, x0, Experiment::initialParameters(), settings);
+  }
   else
     return FilterType<Kind, Model>(model, x0, Experiment::initialParameters(), rebind<Model>(Experiment::dualUkf()));
 }

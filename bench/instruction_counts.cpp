@@ -50,7 +50,8 @@ bool countFilter(const char* only) {
 template <class Experiment>
 bool countPlant(const char* only) {
   return countFilter<FilterKind::Ukf, Experiment>(only) && countFilter<FilterKind::Jukf, Experiment>(only) &&
-         countFilter<FilterKind::Mjukf, Experiment>(only) && countFilter<FilterKind::Dual, Experiment>(only);
+         countFilter<FilterKind::Mjukf, Experiment>(only) && countFilter<FilterKind::MjukfAuto, Experiment>(only) &&
+         countFilter<FilterKind::Dual, Experiment>(only);
 }
 
 }  // namespace

@@ -12,8 +12,8 @@ import os
 import sys
 
 PLANTS = ["flexible_joint", "coupled_tank"]
-FILTERS = ["ukf", "jukf", "mjukf", "dual"]
-LABELS = {"ukf": "UKF", "jukf": "JUKF", "mjukf": "MJUKF", "dual": "dual"}
+FILTERS = ["ukf", "jukf", "mjukf", "mjukf_auto", "dual"]
+LABELS = {"ukf": "UKF", "jukf": "JUKF", "mjukf": "MJUKF", "mjukf_auto": "MJUKF automatic", "dual": "dual"}
 TRIGGER = "desc: Trigger: Client Request: "
 
 

@@ -87,6 +87,7 @@ void registerPlant() {
   registerFilter<FilterKind::Ukf, Experiment>();
   registerFilter<FilterKind::Jukf, Experiment>();
   registerFilter<FilterKind::Mjukf, Experiment>();
+  registerFilter<FilterKind::MjukfAuto, Experiment>();
   registerFilter<FilterKind::Dual, Experiment>();
 }
 

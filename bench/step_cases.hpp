@@ -27,12 +27,15 @@ const std::vector<typename Experiment::Model::Meas>& measurements() {
   return y;
 }
 
-/// Sigma points per time update of a filter; the dual's are its two filters', (2n + 1) + (2p + 1).
+/// Propagations per time update of a filter: its sigma points; the dual's are its two filters',
+/// (2n + 1) + (2p + 1); the automatic MJUKF adds the p forward differences of its sensitivities.
 template <FilterKind Kind, class Model>
 constexpr int pointCount() {
   using F = FilterType<Kind, Model>;
   if constexpr (Kind == FilterKind::Dual)
     return F::SigmaPointCount + F::ParameterSigmaPointCount;
+  else if constexpr (Kind == FilterKind::MjukfAuto)
+    return F::SigmaPointCount + Model::ParamDim;
   else
     return F::SigmaPointCount;
 }
@@ -145,11 +148,22 @@ class FloorSteps {
  private:
   // Points spread about a state of the simulated run, with per-point parameters about the truth (all
   // the truth for the UKF, whose points share θ). The dual: its state filter's 2n + 1 points with θ̂
-  // (the truth), then its parameter filter's 2p + 1 at that state, each with its θⱼ.
+  // (the truth), then its parameter filter's 2p + 1 at that state, each with its θⱼ. The automatic
+  // MJUKF: MJUKF's points, then one point per parameter r at x̂ + δ Wᵣ with θ + δ eᵣ.
   void spreadPoints(const State& centre) {
     const Param truth = Model::trueParameters();
     const Scalar step = Scalar(0.01), thetaStep = Kind == FilterKind::Ukf ? Scalar(0) : Scalar(0.001);
-    if constexpr (Kind == FilterKind::Dual) {
+    if constexpr (Kind == FilterKind::MjukfAuto) {
+      constexpr int points = FilterType<Kind, Model>::SigmaPointCount;
+      for (int i = 0; i < points; ++i) {
+        start_.col(i) = centre + State::Constant(step * Scalar(i - points / 2));
+        theta_.col(i) = truth + Param::Constant(thetaStep * Scalar(i));
+      }
+      for (int r = 0; r < Model::ParamDim; ++r) {
+        start_.col(points + r) = centre + State::Constant(Scalar(1e-6));
+        theta_.col(points + r) = truth + Scalar(1e-6) * Param::Unit(r);
+      }
+    } else if constexpr (Kind == FilterKind::Dual) {
       constexpr int statePoints = FilterType<Kind, Model>::SigmaPointCount;
       for (int i = 0; i < statePoints; ++i) {
         start_.col(i) = centre + State::Constant(step * Scalar(i - statePoints / 2));

@@ -20,6 +20,7 @@ struct CoupledTankPlant {
   static constexpr const char* program = "mjukf_coupled_tank";
   static constexpr const char* title = "Coupled tank";
   static constexpr const char* slug = "coupled_tank";
+  static constexpr const char* simulation = "as the paper: I-TR-BDF2, h = 1 ms, white noise at 30 dB SNR";
   static constexpr const char* table = "Table 3";
   static constexpr std::array<Quantity, 2> states{{{"h1", "upper level h_1", "cm"}, {"h2", "lower level h_2", "cm"}}};
   static constexpr std::array<Quantity, 1> parameters{{{"k_flow", "k_{flow}", "(cm^3/s)/V"}}};

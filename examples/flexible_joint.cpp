@@ -20,6 +20,7 @@ struct FlexibleJointPlant {
   static constexpr const char* program = "mjukf_flexible_joint";
   static constexpr const char* title = "Flexible-joint robot";
   static constexpr const char* slug = "flexible_joint";
+  static constexpr const char* simulation = "as the paper: I-TR-BDF2, h = 1 ms, white noise at 30 dB SNR";
   static constexpr const char* table = "Table 4";
   static constexpr std::array<Quantity, 4> states{{{"theta_m", "motor angle θ_m", "rad"},
                                                    {"omega_m", "motor speed ω_m", "rad/s"},

@@ -76,6 +76,7 @@ struct Snapshot {
   Matrix covariance;
   typename Filter::Param parameters;
   Matrix parameterPoints;
+  Matrix automaticState;  // MJUKF: T, ξ, W, ψ and the information of the automatic modes, side by side
   typename Filter::Meas innovation;
   typename Filter::Meas::PlainObject innovationCovarianceDiagonal;
   Scalar nis;
@@ -92,7 +93,14 @@ struct Snapshot {
         innovationCovarianceDiagonal(f.lastUpdate().innovationCovariance.diagonal()), nis(f.lastUpdate().nis),
         hasPropagatedPoints(f.hasPropagatedPoints()) {
     if constexpr (std::is_same_v<Filter, mjukf::ModifiedJointUkf<typename Filter::Model, typename Filter::Integrator>>)
+    {
       parameterPoints = f.parameterPoints();
+      const auto& k = f.sensitivity();
+      automaticState.resize(f.transformation().rows(), f.transformation().cols() + 1 + k.stateSensitivity().rows() +
+                                                           k.measurementSensitivity().rows() + k.information().cols());
+      automaticState << f.transformation(), f.scalings(), k.stateSensitivity().transpose(),
+          k.measurementSensitivity().transpose(), k.information();
+    }
     if constexpr (IsDual<Filter>::value) {
       parameterCovariance = f.parameterCovariance();
       parameterInnovation = f.lastParameterUpdate().innovation;
@@ -104,7 +112,8 @@ struct Snapshot {
   bool operator==(const Snapshot& o) const {
     using mjukf::testing::bitwiseSame;
     return bitwiseSame(state, o.state) && bitwiseSame(covariance, o.covariance) &&
-           bitwiseSame(parameters, o.parameters) && bitwiseSame(parameterPoints, o.parameterPoints) && bitwiseSame(innovation, o.innovation) &&
+           bitwiseSame(parameters, o.parameters) && bitwiseSame(parameterPoints, o.parameterPoints) &&
+           bitwiseSame(automaticState, o.automaticState) && bitwiseSame(innovation, o.innovation) &&
            bitwiseSame(innovationCovarianceDiagonal, o.innovationCovarianceDiagonal) && nis == o.nis &&
            hasPropagatedPoints == o.hasPropagatedPoints && bitwiseSame(parameterCovariance, o.parameterCovariance) &&
            bitwiseSame(parameterInnovation, o.parameterInnovation) &&
@@ -114,7 +123,8 @@ struct Snapshot {
 };
 
 template <template <class, class> class FilterTemplate, class Stepper = mjukf::ITrBdf2<double>,
-          mjukf::DualUkfOrdering Ordering = mjukf::DualUkfOrdering::PriorParameters, class Model = ToyModel>
+          mjukf::DualUkfOrdering Ordering = mjukf::DualUkfOrdering::PriorParameters, class Model = ToyModel,
+          bool AutomaticMjukf = false>
 struct Toy {
   using Filter = FilterTemplate<Model, Stepper>;
   using Scalar = typename Model::Scalar;
@@ -130,6 +140,7 @@ struct Toy {
       s.scaling = Scalar(-0.1);
       s.transformation.setOnes();
       s.parameterSpread.setConstant(Scalar(0.01));
+      s.automaticTransformation = s.adaptiveScaling = AutomaticMjukf;
     }
     if constexpr (IsDual<Filter>::value) {
       s.initialParameterCovariance.setConstant(Scalar(0.1));
@@ -153,7 +164,12 @@ struct DualKind {
   template <class Stepper = mjukf::ITrBdf2<double>>
   using With = Toy<mjukf::DualUkf, Stepper, Ordering>;
 };
-using Kinds = ::testing::Types<Kind<mjukf::Ukf>, Kind<mjukf::JointUkf>, Kind<mjukf::ModifiedJointUkf>,
+// MJUKF with both automatic modes (T from the sensitivities, adaptive ξ).
+struct AutomaticMjukfKind {
+  template <class Stepper = mjukf::ITrBdf2<double>>
+  using With = Toy<mjukf::ModifiedJointUkf, Stepper, mjukf::DualUkfOrdering::PriorParameters, ToyModel, true>;
+};
+using Kinds = ::testing::Types<Kind<mjukf::Ukf>, Kind<mjukf::JointUkf>, Kind<mjukf::ModifiedJointUkf>, AutomaticMjukfKind,
                                DualKind<mjukf::DualUkfOrdering::PriorParameters>,
                                DualKind<mjukf::DualUkfOrdering::UpdatedParameters>>;
 TYPED_TEST_SUITE(FailurePolicy, Kinds);

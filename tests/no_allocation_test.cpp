@@ -1,6 +1,6 @@
-// No per-step call allocates: every filter on both plants, every kind of call, including refused ones;
-// the dual filter in both orderings; every filter over a discrete-time model and over a model without
-// input; and reset().
+// No per-step call allocates: every filter on both plants and on the 2019 systems, every kind of call,
+// including refused ones; the dual filter in both orderings; the automatic MJUKF; every filter over a
+// discrete-time model and over a model without input; and reset().
 // Two independent witnesses: Eigen's own runtime check (EIGEN_RUNTIME_NO_MALLOC makes any Eigen heap
 // allocation assert while it is forbidden) and a global operator new that counts every allocation.
 
@@ -21,6 +21,7 @@
 #include "mjukf/paper/experiments.hpp"
 #include "mjukf/paper/schedule.hpp"
 #include "no_input_model.hpp"
+#include "mjukf/paper/systems_2019.hpp"
 #include "robustness_support.hpp"
 #include "test_support.hpp"
 
@@ -98,6 +99,29 @@ struct DiscreteCase {
   }
 };
 
+// `Base`'s MJUKF with both automatic modes on (T from the sensitivities, adaptive ξ).
+template <class Base>
+struct Automatic {
+  static auto make() {
+    const auto paper = Base::make();
+    auto s = paper.settings();
+    s.automaticTransformation = true;
+    s.adaptiveScaling = true;
+    return std::decay_t<decltype(paper)>(paper.model(), paper.state(), paper.parameters(), s);
+  }
+};
+
+// issue 10 (part A): the 2019 MJUKF paper's systems, with their integrator (RK4) and no input.
+template <template <class, class> class F, class E>
+struct Case2019 {
+  using Model = typename E::Model;
+  static F<Model, typename E::Integrator> make() {
+    return {Model(), E::initialState(), E::initialParameters(), mjukf::testing::presetSettings<F, E>()};
+  }
+};
+using VanDerPol = mjukf::paper::VanDerPolExperiment<double>;
+using Lorenz = mjukf::paper::LorenzExperiment<double>;
+
 using Robot = mjukf::paper::FlexibleJointExperiment<double>;
 using Tank = mjukf::paper::CoupledTankExperiment<double>;
 using RobotF = mjukf::paper::FlexibleJointExperiment<float>;
@@ -112,7 +136,17 @@ using Cases = ::testing::Types<Case<mjukf::Ukf, Robot>, Case<mjukf::JointUkf, Ro
                                DiscreteCase<mjukf::Ukf, double>, DiscreteCase<mjukf::JointUkf, double>,
                                DiscreteCase<mjukf::ModifiedJointUkf, double>, DiscreteCase<mjukf::DualUkf, double>,
                                DiscreteCase<mjukf::DualUkf, double, kUpdated>,
-                               DiscreteCase<mjukf::ModifiedJointUkf, float>>;
+                               DiscreteCase<mjukf::ModifiedJointUkf, float>,
+                               Case2019<mjukf::JointUkf, VanDerPol>, Case2019<mjukf::ModifiedJointUkf, VanDerPol>,
+                               Case2019<mjukf::DualUkf, VanDerPol>, Case2019<mjukf::JointUkf, Lorenz>,
+                               Case2019<mjukf::ModifiedJointUkf, Lorenz>,
+                               Automatic<Case<mjukf::ModifiedJointUkf, Robot>>,
+                               Automatic<Case<mjukf::ModifiedJointUkf, Tank>>,
+                               Automatic<Case<mjukf::ModifiedJointUkf, RobotF>>,
+                               Automatic<DiscreteCase<mjukf::ModifiedJointUkf, double>>,
+                               Automatic<DiscreteCase<mjukf::ModifiedJointUkf, float>>,
+                               Automatic<Case2019<mjukf::ModifiedJointUkf, VanDerPol>>,
+                               Automatic<Case2019<mjukf::ModifiedJointUkf, Lorenz>>>;
 TYPED_TEST_SUITE(NoAllocation, Cases);
 
 TYPED_TEST(NoAllocation, EveryPerStepCall) {

@@ -55,6 +55,13 @@ template <class A, class B>
   if (a.hasPropagatedPoints() != b.hasPropagatedPoints()) return differ("hasPropagatedPoints");
   if constexpr (IsModifiedJoint<A>::value) {
     if (!bitwiseSame(a.parameterPoints(), b.parameterPoints())) return differ("parameterPoints");
+    if (!bitwiseSame(a.transformation(), b.transformation())) return differ("transformation");
+    if (!bitwiseSame(a.scalings(), b.scalings())) return differ("scalings");
+    if (!bitwiseSame(a.sensitivity().stateSensitivity(), b.sensitivity().stateSensitivity()))
+      return differ("state sensitivity");
+    if (!bitwiseSame(a.sensitivity().measurementSensitivity(), b.sensitivity().measurementSensitivity()))
+      return differ("measurement sensitivity");
+    if (!bitwiseSame(a.sensitivity().information(), b.sensitivity().information())) return differ("information");
   }
   if constexpr (IsDual<A>::value) {
     if (!bitwiseSame(a.parameterCovariance(), b.parameterCovariance())) return differ("parameterCovariance");

@@ -127,6 +127,10 @@ ModifiedJointUkfSettings<To> rebindSettings(const ModifiedJointUkfSettings<From>
   r.scaling = s.scaling;
   r.transformation = s.transformation;
   r.parameterSpread = s.parameterSpread;
+  r.automaticTransformation = s.automaticTransformation;
+  r.adaptiveScaling = s.adaptiveScaling;
+  r.convergenceTime = s.convergenceTime;
+  r.sensitivityInterval = s.sensitivityInterval;
   return r;
 }
 template <class To, class From>

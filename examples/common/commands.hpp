@@ -5,11 +5,13 @@
 #include <cstdio>
 #include <iostream>
 #include <limits>
+#include <set>
 #include <string>
 #include <vector>
 
 #include "common/cli.hpp"
 #include "common/estimation.hpp"
+#include "common/experiment.hpp"
 #include "common/plant.hpp"
 #include "common/simulation.hpp"
 
@@ -20,12 +22,13 @@ template <class Plant>
 int simulateCommand(const std::vector<std::string>& words) {
   using Experiment = typename Plant::Experiment;
   using Model = typename Experiment::Model;
-  const Arguments args(words, {"--out", "--duration", "--seed", "--snr-db", "--change-at"});
+  std::set<std::string> known{"--out", "--duration", "--seed", "--change-at"};
+  if (!hasRelativeNoise<Experiment>) known.insert("--snr-db");  // the 2019 systems' noise has no SNR
+  const Arguments args(words, known);
   const std::string out = args.requiredText("--out");
 
-  SimulationOptions<Model> options;
-  options.stepSize = Experiment::stepSize;
-  options.duration = Experiment::duration;
+  auto options = experimentSimulation<Experiment>(static_cast<std::uint64_t>(args.integer("--seed", 1, 0)),
+                                                  {Model::trueParameters()});
   if (args.has("--change-at")) {
     const auto change = Plant::parameterChange();
     if (!change) throw UsageError(std::string(Plant::title) + " has no parameter-change scenario: drop --change-at");
@@ -36,14 +39,18 @@ int simulateCommand(const std::vector<std::string>& words) {
   }
   options.duration = args.number("--duration", options.duration);
   requireSimulationDuration("--duration", options.duration, options.stepSize);
-  options.seed = static_cast<std::uint64_t>(args.integer("--seed", 1, 0));
   options.snrDb = args.number("--snr-db", 30, /*allowInfinity=*/true);
 
-  const auto data = simulatePlant(Model(), options);
+  const auto data = simulateExperiment<Experiment>(options);
   writePlantData(out, data);
-  std::printf("simulated %s: %ld rows (%.6g s at h = %g s), SNR %g dB, seed %llu -> %s\n", Plant::title,
-              data.rows(), options.duration, options.stepSize, options.snrDb,
-              static_cast<unsigned long long>(options.seed), out.c_str());
+  char noise[64];
+  if (hasRelativeNoise<Experiment>)
+    std::snprintf(noise, sizeof noise, "noise std %g |x_i|", options.relativeNoise);
+  else
+    std::snprintf(noise, sizeof noise, "SNR %g dB", options.snrDb);
+  std::printf("simulated %s: %ld rows (%.6g s at h = %g s), %s, seed %llu -> %s\n", Plant::title, data.rows(),
+              options.duration, options.stepSize, noise, static_cast<unsigned long long>(options.seed),
+              out.c_str());
   return kExitOk;
 }
 

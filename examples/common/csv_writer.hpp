@@ -1,6 +1,6 @@
 #pragma once
 
-// Writes numeric CSV files: a header row, then rows of numbers in the shortest form that reads back
+// Writes CSV files: a header row, then rows of numbers (and plain names) in the shortest form that reads back
 // to the same double (std::to_chars), so a simulated file fed to `estimate` loses nothing.
 
 #include <charconv>
@@ -40,6 +40,16 @@ class CsvWriter {
     const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
     if (field_ > 0) std::fputc(',', file_);
     std::fwrite(buffer, 1, static_cast<std::size_t>(result.ptr - buffer), file_);
+    ++field_;
+    return *this;
+  }
+
+  /// Appends a text field (a name: no comma, quote or line break, so it needs no quoting).
+  CsvWriter& operator<<(const std::string& text) {
+    if (text.find_first_of(",\"\n\r") != std::string::npos)
+      throw std::logic_error(path_ + ": the field '" + text + "' would need quoting");
+    if (field_ > 0) std::fputc(',', file_);
+    std::fputs(text.c_str(), file_);
     ++field_;
     return *this;
   }

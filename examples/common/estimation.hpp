@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "common/experiment.hpp"
 #include "common/plant_data.hpp"
 #include "mjukf/dual_ukf.hpp"
 #include "mjukf/joint_ukf.hpp"
@@ -95,21 +96,22 @@ EstimateRun<typename Experiment::Model> runFilter(const typename Experiment::Mod
                                                   const FilterSetup<Experiment>& setup,
                                                   const PlantData<typename Experiment::Model>& data) {
   using Model = typename Experiment::Model;
+  using Integrator = ExperimentIntegrator<Experiment>;
   switch (setup.kind) {
     case FilterKind::Ukf: {
-      Ukf<Model> filter(model, setup.initialState, setup.initialParameters, setup.ukf);
+      Ukf<Model, Integrator> filter(model, setup.initialState, setup.initialParameters, setup.ukf);
       return detail::runSchedule(filter, data, setup.measurementEvery);
     }
     case FilterKind::JointUkf: {
-      JointUkf<Model> filter(model, setup.initialState, setup.initialParameters, setup.jointUkf);
+      JointUkf<Model, Integrator> filter(model, setup.initialState, setup.initialParameters, setup.jointUkf);
       return detail::runSchedule(filter, data, setup.measurementEvery);
     }
     case FilterKind::ModifiedJointUkf: {
-      ModifiedJointUkf<Model> filter(model, setup.initialState, setup.initialParameters, setup.modifiedJointUkf);
+      ModifiedJointUkf<Model, Integrator> filter(model, setup.initialState, setup.initialParameters, setup.modifiedJointUkf);
       return detail::runSchedule(filter, data, setup.measurementEvery);
     }
     case FilterKind::DualUkf: {
-      DualUkf<Model> filter(model, setup.initialState, setup.initialParameters, setup.dualUkf);
+      DualUkf<Model, Integrator> filter(model, setup.initialState, setup.initialParameters, setup.dualUkf);
       return detail::runSchedule(filter, data, setup.measurementEvery);
     }
   }

@@ -7,7 +7,6 @@
 // so its column has no published value.
 
 #include <algorithm>
-#include <cstdarg>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -22,32 +21,17 @@
 
 #include "common/cli.hpp"
 #include "common/estimation.hpp"
+#include "common/format.hpp"
+#include "common/statistics.hpp"
+#include "common/experiment.hpp"
 #include "common/plant.hpp"
 #include "common/plot.hpp"
+#include "common/report.hpp"
 #include "common/simulation.hpp"
 
 namespace mjukf::examples {
 
 namespace detail {
-
-// printf into a string of any length, for the tables that go both to the console and to table.txt.
-[[gnu::format(printf, 1, 2)]] inline std::string format(const char* pattern, ...) {
-  va_list args, again;
-  va_start(args, pattern);
-  va_copy(again, args);
-  const int size = std::vsnprintf(nullptr, 0, pattern, args);
-  va_end(args);
-  std::string text(size > 0 ? static_cast<std::size_t>(size) : 0, '\0');
-  if (size > 0) std::vsnprintf(text.data(), text.size() + 1, pattern, again);
-  va_end(again);
-  return text;
-}
-
-inline double median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
 
 template <class Model>
 struct Comparison {
@@ -186,13 +170,10 @@ PlantData<typename Plant::Experiment::Model> paperData(const std::string& path, 
     description = path;
     return data;
   }
-  SimulationOptions<Model> options;
-  options.stepSize = h;
+  auto options = experimentSimulation<typename Plant::Experiment>(seed, truth);
   options.duration = duration;
-  options.seed = seed;
-  options.parameters = truth;
   description = format("fresh simulation (%g s, seed %llu, 30 dB SNR)", duration, static_cast<unsigned long long>(seed));
-  return simulatePlant(Model(), options);
+  return simulateExperiment<typename Plant::Experiment>(options);
 }
 
 }  // namespace detail
@@ -222,11 +203,8 @@ int paperCommand(const std::vector<std::string>& words) {
   const auto path = [&](const std::string& name) { return (fs::path(outDir) / (std::string(Plant::slug) + "_" + name)).string(); };
   Plotter plotter;
   std::vector<std::string> written;
-  std::string report;
-  const auto say = [&](const std::string& line) {
-    std::cout << line << "\n";
-    report += line + "\n";
-  };
+  detail::Report report;
+  const auto say = [&](const std::string& line) { report.say(line); };
 
   // The paper's table: JUKF and MJUKF, the paper's settings, on one data set; beside them the dual UKF
   // with the library's settings (no published value: the paper has no dual filter).
@@ -308,16 +286,7 @@ int paperCommand(const std::vector<std::string>& words) {
                                    "state estimates with a parameter change", plotter, written);
   }
 
-  const std::string tableFile = path("table.txt");
-  {
-    std::ofstream table(tableFile);
-    table << report;
-    table.close();
-    if (!table) throw OutputError(tableFile + ": cannot write the file");
-  }
-  written.push_back(tableFile);
-  std::cout << "\nwrote:\n";
-  for (const auto& file : written) std::cout << "  " << file << "\n";
+  report.finish(path("table.txt"), written);
   return kExitOk;
 }
 

@@ -10,14 +10,19 @@
 //   static constexpr const char* program;                   // executable name, for messages
 //   static constexpr const char* title;                     // "Coupled tank"
 //   static constexpr const char* slug;                      // "coupled_tank", for file names
-//   static constexpr const char* table;                     // "Table 3"
-//   static constexpr std::array<Quantity, StateDim> states;
+//   static constexpr const char* simulation;                // how `simulate` makes data, for the usage
 //   static constexpr std::array<Quantity, ParamDim> parameters;
+//   static std::optional<ParameterChange<Param>> parameterChange();
+//
+// and, for the paper's plants only (the `paper` subcommand exists where they are given):
+//
+//   static constexpr std::array<Quantity, StateDim> states;  // for the state figures
+//   static constexpr const char* table;                     // "Table 3"
 //   static constexpr PaperNumbers<ParamDim> published;       // paper's table (Python, HP Z420, mean of 20)
 //   static constexpr PaperNumbers<ParamDim> reference;       // conformance RMSEs; reference scripts' times
-//   static std::optional<ParameterChange<Param>> parameterChange();
 
 #include <array>
+#include <type_traits>
 
 namespace mjukf::examples {
 
@@ -46,5 +51,17 @@ struct ParameterChange {
   Param after;
   double scaling;
 };
+
+namespace detail {
+template <class Plant, class = void>
+struct HasPaperTable : std::false_type {};
+template <class Plant>
+struct HasPaperTable<Plant, std::void_t<decltype(Plant::published), decltype(Plant::reference), decltype(Plant::table)>>
+    : std::true_type {};
+}  // namespace detail
+
+/// True for the paper's plants, which have a published table to compare with (`paper` subcommand).
+template <class Plant>
+inline constexpr bool hasPaperTable = detail::HasPaperTable<Plant>::value;
 
 }  // namespace mjukf::examples

@@ -93,6 +93,16 @@ class Plotter {
 
   /// Writes `figure.png` with a script beside it; returns whether the PNG was made.
   bool draw(const Figure& figure) {
+    std::vector<const std::string*> files;
+    for (const Panel& panel : figure.panels)
+      for (const Series& series : panel.series) files.push_back(&series.file);
+    return drawScript(figure.png, figure.width, figure.height, files, script(figure));
+  }
+
+  /// Writes `png` from the gnuplot commands `body` (which read `files`), with the terminal and output
+  /// set first and the whole script kept beside the PNG; returns whether the PNG was made.
+  bool drawScript(const std::string& png, int width, int height, const std::vector<const std::string*>& files,
+                  const std::string& body) {
     if (!available()) {
       if (!warned_)
         std::cout << "gnuplot (with a PNG terminal) was not found: no plots, the CSV files are written "
@@ -101,18 +111,19 @@ class Plotter {
       return false;
     }
     // A gnuplot string cannot hold a line break, so such a path cannot be plotted.
-    std::vector<const std::string*> paths{&figure.png};
-    for (const Panel& panel : figure.panels)
-      for (const Series& series : panel.series) paths.push_back(&series.file);
+    std::vector<const std::string*> paths{&png};
+    paths.insert(paths.end(), files.begin(), files.end());
     for (const std::string* path : paths)
       if (path->find_first_of("\n\r") != std::string::npos) {
-        std::cout << "cannot plot with a line break in a path: no " << figure.png << "\n";
+        std::cout << "cannot plot with a line break in a path: no " << png << "\n";
         return false;
       }
-    const std::string scriptPath = figure.png.substr(0, figure.png.rfind('.')) + ".gp";
+    const std::string scriptPath = png.substr(0, png.rfind('.')) + ".gp";
     {
       std::ofstream script(scriptPath);
-      script << this->script(figure);
+      script << "set terminal " + terminal_ + " size " + std::to_string(width) + "," + std::to_string(height) +
+                    (terminal_ == "pngcairo" ? " enhanced font 'Sans,10'" : "") + "\n";
+      script << "set output " + detail::gnuplotQuote(png) + "\n" << body;
       if (!script) {
         std::cout << "could not write " << scriptPath << ": no plot\n";
         return false;
@@ -128,9 +139,6 @@ class Plotter {
  private:
   std::string script(const Figure& figure) const {
     std::string s;
-    s += "set terminal " + terminal_ + " size " + std::to_string(figure.width) + "," +
-         std::to_string(figure.height) + (terminal_ == "pngcairo" ? " enhanced font 'Sans,10'" : "") + "\n";
-    s += "set output " + detail::gnuplotQuote(figure.png) + "\n";
     s += "set datafile separator ','\n";
     s += "set grid\nset key outside right top vertical Left reverse\n";
     s += "set multiplot layout " + std::to_string(figure.rows) + "," + std::to_string(figure.columns) +

@@ -13,21 +13,24 @@
 #include "common/csv.hpp"
 #include "common/csv_writer.hpp"
 #include "common/paper_command.hpp"
+#include "common/study_command.hpp"
 
 namespace mjukf::examples {
 
 template <class Plant>
 void printUsage(std::ostream& out) {
   const bool change = Plant::parameterChange().has_value();
+  constexpr bool relativeNoise = hasRelativeNoise<typename Plant::Experiment>;
   out << "usage: " << Plant::program << " SUBCOMMAND [--flag value ...]   (" << Plant::title << ")\n"
       << "\n"
-      << "  simulate --out FILE [--duration S] [--seed N] [--snr-db DB]" << (change ? " [--change-at T]" : "") << "\n"
-      << "      Simulates the plant as the paper does (I-TR-BDF2, h = 1 ms, white noise at 30 dB SNR) and writes\n"
+      << "  simulate --out FILE [--duration S] [--seed N]" << (relativeNoise ? "" : " [--snr-db DB]")
+      << (change ? " [--change-at T]" : "") << "\n"
+      << "      Simulates the plant (" << Plant::simulation << ") and writes\n"
       << "      t, y1..ym, x1_true..xn_true, theta1_true..thetap_true, one row per step.\n"
       << (change ? "      --change-at T runs the parameter-change scenario (30 s unless --duration).\n" : "")
       << "\n"
       << "  estimate --filter ukf|jukf|mjukf|dual --data FILE --out FILE [settings]\n"
-      << "      Runs a filter with the paper's settings and schedule over the measurements y1..ym of FILE and\n"
+      << "      Runs a filter with the preset settings and schedule over the measurements y1..ym of FILE and\n"
       << "      writes t, x1..xn, theta1..thetap, one row per data row; prints the parameter RMSEs and\n"
       << "      loop_seconds. dual is the dual UKF with the library's settings (the paper runs none).\n"
       << "      Settings (diagonals take one number or a comma-separated list):\n"
@@ -36,13 +39,24 @@ void printUsage(std::ostream& out) {
       << "      mjukf only: --xi X  --p-theta LIST  --transform LIST (row-major);\n"
       << "      dual only: --ordering prior|updated (the state's time update with the prior or the corrected\n"
       << "      parameters; default prior)  --r-theta DIAG (added to R in the parameter filter's update)\n"
-      << "\n"
-      << "  paper [--data FILE] [--out-dir DIR] " << (change ? "[--change-data FILE] " : "")
-      << "[--runs N] [--duration S] [--seed N]\n"
-      << "      JUKF and MJUKF as in the paper, and the dual UKF, on a fresh simulation (or FILE): the paper's\n"
-      << "      table next to ours (time: median of N = 20 runs), CSV files and PNG plots in DIR (default\n"
-      << "      paper_" << Plant::slug << ").\n"
-      << "      --duration S is the length of the simulated runs (refused when every data set is a file).\n"
+      << "\n";
+  if constexpr (hasPaperTable<Plant>)
+    out << "  paper [--data FILE] [--out-dir DIR] " << (change ? "[--change-data FILE] " : "")
+        << "[--runs N] [--duration S] [--seed N]\n"
+        << "      JUKF and MJUKF as in the paper, and the dual UKF, on a fresh simulation (or FILE): the paper's\n"
+        << "      table next to ours (time: median of N = 20 runs), CSV files and PNG plots in DIR (default\n"
+        << "      paper_" << Plant::slug << ").\n"
+        << "      --duration S is the length of the simulated runs (refused when every data set is a file).\n"
+        << "\n";
+  out << "  study [--seeds LIST] [--filters LIST] " << (change ? "[--scenarios static,change] " : "")
+      << "[--jobs N] [--out-dir DIR] [--duration S]\n"
+      << "      The filters over many noise draws, one simulation per seed (default 1-20; ranges and lists such\n"
+      << "      as 1-100 or 1,5,9-12), --jobs threads (default: every core; the results do not depend on it).\n"
+      << "      Filters: jukf, mjukf, dual" << (detail::studyFilters<typename Plant::Experiment::Model>().size() > 3 ? ", mjukf-auto" : "")
+      << " (default jukf,mjukf" << (detail::studyFilters<typename Plant::Experiment::Model>().size() > 3 ? ",mjukf-auto" : "")
+      << "). Writes DIR/" << Plant::slug << "_study.csv\n"
+      << "      (one row per seed x filter: RMSEs, diverged, status), a table of mean +- sd and median per filter\n"
+      << "      and a box plot per scenario (default DIR study_" << Plant::slug << "). docs/studies.md.\n"
       << "\n"
       << "exit codes: 0 ok, 1 the run failed, 2 malformed input file, 64 bad command line\n";
 }
@@ -59,7 +73,9 @@ int runProgram(int argc, char** argv) {
   try {
     if (command == "simulate") return simulateCommand<Plant>(flags);
     if (command == "estimate") return estimateCommand<Plant>(flags);
-    if (command == "paper") return paperCommand<Plant>(flags);
+    if (command == "study") return studyCommand<Plant>(flags);
+    if constexpr (hasPaperTable<Plant>)
+      if (command == "paper") return paperCommand<Plant>(flags);
     throw UsageError("unknown subcommand '" + command + "'");
   } catch (const UsageError& e) {
     std::cerr << Plant::program << ": " << e.what() << "\n\n";

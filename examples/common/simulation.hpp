@@ -3,6 +3,8 @@
 // Simulated measurements as the paper makes them (docs/plants.md §4): the plant integrated with I-TR-BDF2 at
 // step h from x₀, then white Gaussian noise of one standard deviation for every channel,
 // σ = sqrt(var(all states) / 10^(SNR/10)), the variance taken over every channel and sample together.
+// The 2019 systems (mjukf/paper/systems_2019.hpp) are integrated with their own integrator and take
+// noise relative to the signal instead: std ρ·|yᵢ| for each component of each sample.
 
 #include <cmath>
 #include <cstdint>
@@ -38,6 +40,7 @@ struct SimulationOptions {
   double stepSize = 1e-3;
   std::uint64_t seed = 1;
   double snrDb = 30;  ///< +inf for noise-free measurements
+  double relativeNoise = 0;  ///< > 0: noise of std relativeNoise·|yᵢ| per component, in place of the SNR
   typename Model::State initialState = Model::State::Zero();
   TrueParameters<typename Model::Param> parameters{Model::trueParameters()};
 };
@@ -57,8 +60,11 @@ double noiseStandardDeviation(const std::vector<State>& states, double snrDb) {
   return std::sqrt(squares / count / std::pow(10.0, snrDb / 10));
 }
 
-template <class Model>
-PlantData<Model> simulatePlant(const Model& model, const SimulationOptions<Model>& options) {
+/// The noise draws depend on `options.seed` alone (one standard normal per component and row, in
+/// row order), so a run is reproduced from its seed.
+template <class Model, class Integrator = ITrBdf2<double>>
+PlantData<Model> simulatePlant(const Model& model, const SimulationOptions<Model>& options,
+                               const Integrator& integrator = Integrator()) {
   using State = typename Model::State;
   using Param = typename Model::Param;
   const double h = options.stepSize;
@@ -74,17 +80,20 @@ PlantData<Model> simulatePlant(const Model& model, const SimulationOptions<Model
   for (long k = 0; k < rows; ++k) data.parameterTruth[static_cast<std::size_t>(k)] = options.parameters.atRow(k, h);
   // The step from t_k runs with the parameters in force at t_k; the input is evaluated at each stage.
   mjukf::simulate(
-      model, ITrBdf2<double>(), options.initialState,
+      model, integrator, options.initialState,
       [&](long k) -> const Param& { return data.parameterTruth[static_cast<std::size_t>(k)]; }, 0.0, h, rows - 1,
       [&](long k, double, const State& x) { data.stateTruth[static_cast<std::size_t>(k)] = x; });
 
-  const double sigma = std::isinf(options.snrDb) ? 0.0 : noiseStandardDeviation(data.stateTruth, options.snrDb);
+  const bool relative = options.relativeNoise > 0;
+  const double sigma =
+      relative || std::isinf(options.snrDb) ? 0.0 : noiseStandardDeviation(data.stateTruth, options.snrDb);
   std::mt19937_64 random(options.seed);
   std::normal_distribution<double> noise(0.0, 1.0);
   data.y.resize(static_cast<std::size_t>(rows));
   for (std::size_t k = 0; k < data.y.size(); ++k) {
     data.y[k] = model.measurement(data.stateTruth[k], data.parameterTruth[k]);
-    for (int c = 0; c < Model::MeasDim; ++c) data.y[k](c) += sigma * noise(random);
+    for (int c = 0; c < Model::MeasDim; ++c)
+      data.y[k](c) += (relative ? options.relativeNoise * std::abs(data.y[k](c)) : sigma) * noise(random);
   }
   return data;
 }

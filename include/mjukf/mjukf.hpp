@@ -12,6 +12,8 @@
 #include "mjukf/model.hpp"
 #include "mjukf/models/coupled_tank.hpp"
 #include "mjukf/models/flexible_joint.hpp"
+#include "mjukf/models/lorenz.hpp"
+#include "mjukf/models/van_der_pol.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
 #include "mjukf/result.hpp"
 #include "mjukf/settings_error.hpp"

@@ -4,6 +4,9 @@
 /// The modified joint UKF (MJUKF): state-only sigma points, each carrying its own parameter vector,
 /// updated by a scaled transformation of the measurement error (docs/algorithms.md §5; paper eqs. 8–10).
 
+#include <cmath>
+#include <limits>
+
 #include <Eigen/Core>
 
 #include "mjukf/detail/finite.hpp"
@@ -14,6 +17,7 @@
 #include "mjukf/model.hpp"
 #include "mjukf/parameter_bounds.hpp"
 #include "mjukf/settings_error.hpp"
+#include "mjukf/parameter_sensitivity.hpp"
 
 namespace mjukf {
 
@@ -30,14 +34,32 @@ struct ModifiedJointUkfSettings
   using Param = typename Model::Param;
   /// The type of T (p × m).
   using Transformation = Eigen::Matrix<Scalar, Model::ParamDim, Model::MeasDim>;
-  /// ξ, the scaling parameter of eq. 9: with θᵢ ← θ̂ − ξ T (y − Yᵢ), a negative ξ moves a parameter up
-  /// when the measurements it raises are above their prediction (docs/algorithms.md §5: the tank's
-  /// ∂y/∂k_flow > 0 takes ξ = −1). Too large diverges, too small converges slowly.
+  /// ξ, the scaling parameter of eq. 9, θᵢ ← θ̂ − ξ T (y − Yᵢ). Sign: θ̂ approaches the truth when
+  /// ξ (T ψ)ᵣᵣ < 0 for each parameter r, ψ = ∂ŷ/∂θ̂ through the dynamics; with T ≥ 0, ξ is negative
+  /// when the measurements rise with the parameter (the tank's ∂y/∂k_flow > 0 takes ξ = −1; ξ = +1
+  /// diverges). Too large diverges, too small converges slowly (docs/tuning-mjukf.md).
   Scalar scaling = 0;
   /// T of eq. 9 (p × m): how much each measurement's error moves each parameter. Each row sums to 1.
   Transformation transformation = Transformation::Zero();
   /// p_θ of eq. 8: the spacing of the initial per-point parameters θᵢ around θ̂₀.
   Param parameterSpread = Param::Zero();
+  /// true: T is computed by the filter from the sensitivities of the measurements to the parameters
+  /// through the dynamics (eqs. 14–15), refreshed at every time update, and `transformation` is not
+  /// used (docs/tuning-mjukf.md). false (the paper): `transformation` as given.
+  bool automaticTransformation = false;
+  /// true: ξ is set at every measurement update, for each parameter, from the sensitivities, the
+  /// innovation covariance P_yy and the information gathered so far (a recursive least-squares gain,
+  /// docs/tuning-mjukf.md), and `scaling` is not used. false (the paper): `scaling` as given.
+  bool adaptiveScaling = false;
+  /// With `adaptiveScaling`: the memory of the parameter estimate in seconds of model time, i.e. the
+  /// time over which the parameters are taken as constant. A change of the true parameters is tracked
+  /// with about this time constant; a longer memory averages more noise out. Must be > 0. The default
+  /// served the tank, the robot (with its parameter change), Van der Pol and Lorenz alike
+  /// (docs/tuning-mjukf.md).
+  Scalar convergenceTime = Scalar(5);
+  /// With either automatic mode: the sensitivities are recomputed at every `sensitivityInterval`-th
+  /// time update (p extra propagations each) and kept in between; 0: once, at the first time update.
+  int sensitivityInterval = 1;
 };
 
 /// Modified joint unscented Kalman filter. Sigma points are drawn for the state alone (L = n, 2n + 1
@@ -83,6 +105,7 @@ class ModifiedJointUkf
   using Transformation = Eigen::Matrix<Scalar, ParamDim, MeasDim>;
   /// The per-point parameter vectors θᵢ, one column per sigma point.
   using ParamPoints = Eigen::Matrix<Scalar, ParamDim, SigmaPointCount>;
+  using Sensitivity = ParameterSensitivity<Scalar, StateDim, MeasDim, ParamDim>;
 
 #if MJUKF_EXCEPTIONS
   /// Throws std::invalid_argument naming the setting when a setting or the initial values are invalid
@@ -100,11 +123,15 @@ class ModifiedJointUkf
     if (SettingsError e = detail::requireFinite(kOwner, "transformation (T)", settings.transformation)) return e;
     if (SettingsError e = detail::requireFinite(kOwner, "parameterSpread (p_theta)", settings.parameterSpread))
       return e;
+    if (settings.adaptiveScaling && !(std::isfinite(settings.convergenceTime) && settings.convergenceTime > 0))
+      return detail::invalid(kOwner, "convergenceTime", "must be finite and > 0 (seconds)");
+    if (settings.sensitivityInterval < 0) return detail::invalid(kOwner, "sensitivityInterval", "must be >= 0");
     // The rows of T sum to 1 (paper eq. 14): T only distributes the error, ξ sets its scale. A T that
-    // does not is almost always a typo or a transposed matrix.
+    // does not is almost always a typo or a transposed matrix. (With automaticTransformation, T is the
+    // filter's.)
     const auto rowSums = settings.transformation.rowwise().sum();
     const Scalar tolerance = Scalar(1000) * Eigen::NumTraits<Scalar>::epsilon() * Scalar(MeasDim);
-    if ((rowSums.array() - Scalar(1)).abs().maxCoeff() > tolerance)
+    if (!settings.automaticTransformation && (rowSums.array() - Scalar(1)).abs().maxCoeff() > tolerance)
       return detail::invalid(kOwner, "transformation (T)", "must have rows that each sum to 1");
     return Engine::validateSettings(kOwner, settings);
   }
@@ -117,6 +144,19 @@ class ModifiedJointUkf
   const Param& parameters() const { return parameters_; }
   /// The θᵢ, one column per sigma point, in the order of the sigma points.
   const ParamPoints& parameterPoints() const { return parameterPoints_; }
+  /// T of the last measurement update (with `automaticTransformation`, from the sensitivities; zero
+  /// before the first update), else the setting.
+  const Transformation& transformation() const {
+    return this->settings_.automaticTransformation ? transformation_ : this->settings_.transformation;
+  }
+  /// ξ of the last measurement update, per parameter (with `adaptiveScaling`; zero before the first
+  /// update), else the setting for every parameter.
+  Param scalings() const {
+    return this->settings_.adaptiveScaling ? scalings_ : Param::Constant(this->settings_.scaling);
+  }
+  /// What the automatic modes know (W = ∂x̂/∂θ̂, ψ = ∂ŷ/∂θ̂ of the last update, the information about
+  /// θ); not followed, and zero, when neither mode is on.
+  const Sensitivity& sensitivity() const { return sensitivity_; }
 
   /// Starts again from (state, covariance), keeping θ̂ and the θᵢ. When one is not finite or the
   /// covariance is not symmetric positive definite, it changes nothing and throws
@@ -126,6 +166,7 @@ class ModifiedJointUkf
     if (SettingsError e = detail::requireFinite(kOwner, "state", state)) return detail::report(e);
     if (SettingsError e = Engine::checkResetCovariance(kOwner, covariance)) return detail::report(e);
     this->resetEstimate(state, covariance);
+    sensitivity_.restartState();
     return ResetResult();
   }
   /// Starts again from (state, covariance) and θ̂ = `parameters`, the θᵢ spread around it by eq. 8 as
@@ -150,9 +191,17 @@ class ModifiedJointUkf
     spreadParameters(initialParameters);
   }
 
-  // Eq. 8: θᵢ = θ̂₀ − p_θ (n + 1) + p_θ (i + 1), i = 0 … 2n; their mean is θ̂₀.
+  // Eq. 8: θᵢ = θ̂₀ − p_θ (n + 1) + p_θ (i + 1), i = 0 … 2n; their mean is θ̂₀. The automatic modes
+  // start knowing each parameter to about the larger of its size and the half-width of the θᵢ.
   void spreadParameters(const Param& center) {
     const Settings& s = this->settings_;
+    Param scale = center.cwiseAbs().cwiseMax(s.parameterSpread.cwiseAbs() * Scalar(StateDim + 1));
+    for (int r = 0; r < ParamDim; ++r)
+      if (!(scale(r) > Scalar(0))) scale(r) = Scalar(1);
+    sensitivity_.start(scale, s.measurementNoise);
+    timeUpdates_ = 0;
+    transformation_.setZero();
+    scalings_.setZero();
     parameters_ = center;
     for (int i = 0; i < SigmaPointCount; ++i)
       parameterPoints_.col(i) = center - s.parameterSpread * Scalar(StateDim + 1) + s.parameterSpread * Scalar(i + 1);
@@ -160,13 +209,32 @@ class ModifiedJointUkf
       for (int i = 0; i < SigmaPointCount; ++i) s.parameterBounds.clamp(parameterPoints_.col(i));
   }
 
-  // χᵢ⁺ = Φ_h(χᵢ; t, θᵢ), each point with its own θᵢ
+  bool automatic() const { return this->settings_.automaticTransformation || this->settings_.adaptiveScaling; }
+  bool refreshDue() const {
+    const int every = this->settings_.sensitivityInterval;
+    return every == 0 ? timeUpdates_ == 0 : timeUpdates_ % every == 0;
+  }
+
+  // χᵢ⁺ = Φ_h(χᵢ; t, θᵢ), each point with its own θᵢ. The automatic modes then follow W = ∂x̂/∂θ̂
+  // about point 0 (χ₀ = x̂ with θ₀), whose propagation is the nominal of the forward differences.
   template <class InputSource>
   void propagatePoints(const InputSource& input, Scalar t, Scalar h, int steps, typename Engine::Points& points) {
+    const State x0 = points.col(0);
     for (int i = 0; i < SigmaPointCount; ++i) {
       const Param theta = parameterPoints_.col(i);
       points.col(i) = detail::propagate(this->model_, this->integrator_, input, theta, t, h, steps, points.col(i));
     }
+    if (!automatic()) return;
+    const Scalar interval = h * Scalar(steps);
+    if (!refreshDue()) return sensitivity_.keepPrediction(interval);
+    sensitivity_.predict(x0, parameterPoints_.col(0), points.col(0), interval, [&](const State& x, const Param& theta) {
+      return detail::propagate(this->model_, this->integrator_, input, theta, t, h, steps, x);
+    });
+  }
+  void commitParameterPrediction() {
+    if (!automatic()) return;
+    sensitivity_.commitPrediction();
+    ++timeUpdates_;
   }
   // Yᵢ = g(χᵢ⁺, θᵢ); points drawn afresh are paired with the θᵢ in order.
   void measurePoints(const typename Engine::Points& points, typename Engine::MeasPoints& measured) {
@@ -175,11 +243,16 @@ class ModifiedJointUkf
   }
   template <class InputSource>
   State propagateOpenLoop(const InputSource& input, Scalar t, Scalar h, int steps) {
+    openLoopInterval_ = h * Scalar(steps);
     return detail::propagate(this->model_, this->integrator_, input, parameters_, t, h, steps, state());
+  }
+  void commitOpenLoop() {
+    if (automatic()) sensitivity_.commitOpenLoop(openLoopInterval_);
   }
 
   // Eqs. 9–10 into the candidates, from the Yᵢ of the state's correction.
   Status correctParameters(const Meas& y, const typename Engine::Mask* present) {
+    if (automatic()) return correctParametersAutomatically(y, present);
     const Settings& s = this->settings_;
     if (present) reducedTransformation(*present);
     const Transformation& transformation = present ? maskedTransformation_ : s.transformation;
@@ -201,6 +274,44 @@ class ModifiedJointUkf
   void commitParameterCorrection() {
     parameters_ = candidateParameters_;
     parameterPoints_ = candidateParameterPoints_;
+    if (!automatic()) return;
+    sensitivity_.commitCorrection();
+    transformation_ = candidateTransformation_;
+    scalings_ = candidateScalings_;
+  }
+
+  // Eqs. 9–10 with T and a per-parameter ξ from the sensitivities (docs/tuning-mjukf.md):
+  // θᵢ ← θ̂ − diag(ξ) T (y − Yᵢ).
+  Status correctParametersAutomatically(const Meas& y, const typename Engine::Mask* present) {
+    const Settings& s = this->settings_;
+    const Scalar memory = s.adaptiveScaling ? s.convergenceTime : std::numeric_limits<Scalar>::infinity();
+    const auto measure = [this](const State& x, const Param& theta) { return this->model_.measurement(x, theta); };
+    if (!sensitivity_.correct(state(), parameters_, measure, this->core_.candidateGainTransposed(),
+                              this->core_.candidateInnovationFactor(), memory, present))
+      return Status::NonFiniteResult;
+    if (s.automaticTransformation) {
+      sensitivity_.transformation(candidateTransformation_);
+    } else {
+      if (present) reducedTransformation(*present);
+      candidateTransformation_ = present ? maskedTransformation_ : s.transformation;
+    }
+    if (s.adaptiveScaling) sensitivity_.scaling(candidateTransformation_, this->core_.candidateInnovationFactor(), candidateScalings_);
+    else candidateScalings_.setConstant(s.scaling);
+    const auto& measured = this->core_.measuredPoints();
+    for (int i = 0; i < SigmaPointCount; ++i) {  // eq. 9
+      measurementError_ = y - measured.col(i);
+      if (present)
+        for (int j = 0; j < MeasDim; ++j)
+          if (!(*present)(j)) measurementError_(j) = Scalar(0);
+      candidateParameterPoints_.col(i) = parameters_;
+      candidateParameterPoints_.col(i).noalias() -=
+          candidateScalings_.asDiagonal() * (candidateTransformation_ * measurementError_);
+      if (boundsActive_) s.parameterBounds.clamp(candidateParameterPoints_.col(i));
+    }
+    candidateParameters_ = candidateParameterPoints_.rowwise().sum() / Scalar(SigmaPointCount);  // eq. 10
+    if (!detail::allFinite(candidateParameterPoints_) || !detail::allFinite(candidateParameters_))
+      return Status::NonFiniteResult;
+    return Status::Ok;
   }
 
   // T with the columns of missing components zeroed and each row rescaled to sum to 1 (eq. 14).
@@ -223,6 +334,14 @@ class ModifiedJointUkf
   ParamPoints candidateParameterPoints_;
   Meas measurementError_;
   Transformation maskedTransformation_;
+  // The automatic modes (committed with the parameters).
+  Sensitivity sensitivity_;
+  long timeUpdates_ = 0;
+  Transformation transformation_ = Transformation::Zero();
+  Param scalings_ = Param::Zero();
+  Transformation candidateTransformation_ = Transformation::Zero();
+  Param candidateScalings_ = Param::Zero();
+  Scalar openLoopInterval_ = 0;
 };
 
 }  // namespace mjukf

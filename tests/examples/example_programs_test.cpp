@@ -17,52 +17,21 @@
 #include <gtest/gtest.h>
 
 #include "common/csv.hpp"
+#include "examples/run_program.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 using mjukf::examples::readCsv;
+using mjukf::program_tests::Result;
+using mjukf::program_tests::run;
+using mjukf::program_tests::scratch;
+using mjukf::program_tests::shellQuote;
+using mjukf::program_tests::writeFile;
 
 const std::string kTank = MJUKF_COUPLED_TANK;
 const std::string kRobot = MJUKF_FLEXIBLE_JOINT;
 const std::string kData = MJUKF_DATA_DIR;
-
-struct Result {
-  int exitCode = -1;
-  std::string output;  // stdout and stderr together
-};
-
-Result run(const std::string& command) {
-  Result result;
-  std::FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-  if (pipe == nullptr) return result;
-  char buffer[4096];
-  while (std::fgets(buffer, sizeof buffer, pipe) != nullptr) result.output += buffer;
-  const int status = pclose(pipe);
-  result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
-
-// A scratch path of this test's own, so that tests may run in parallel.
-std::string scratch(const std::string& name) {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::path(MJUKF_SCRATCH_DIR) / (std::string(info->test_suite_name()) + "." + info->name());
-  fs::create_directories(dir);
-  return (dir / name).string();
-}
-
-std::string writeFile(const std::string& name, const std::string& text) {
-  const std::string path = scratch(name);
-  std::ofstream(path) << text;
-  return path;
-}
-
-// `text` as one word for the shell.
-std::string shellQuote(const std::string& text) {
-  std::string quoted = "'";
-  for (char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return quoted + "'";
-}
 
 // The value printed as `key: value` (NaN when missing).
 double printed(const std::string& output, const std::string& key) {

@@ -167,6 +167,10 @@ class UnscentedCore {
   /// The factor of candidateCovariance() after settle() accepted it.
   const Matrix& candidateFactor() const { return guard_.factor(); }
   const SigmaPoints& sigmaPoints() const { return sigmaPoints_; }
+  /// After correct() returned Ok: Kᵀ and the lower Cholesky factor of P_yy (the MJUKF's automatic
+  /// modes read them to follow the sensitivity of the estimate to the parameters).
+  const Eigen::Matrix<Scalar, M, L>& candidateGainTransposed() const { return gainTransposed_; }
+  const MeasMatrix& candidateInnovationFactor() const { return innovationFactor_; }
 
  private:
   void commitCandidate() {

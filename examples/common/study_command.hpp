@@ -1,0 +1,416 @@
+#pragma once
+
+// The `study` subcommand: the filters over many noise realisations (docs/studies.md). One run is one
+// seed: the plant is simulated with that seed's noise and every filter asked for estimates from the
+// same data. Runs go to --jobs threads; each depends on its seed alone and the results are written in
+// seed order, so the output is the same for any number of jobs.
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <cstdint>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <string>
+#include <string_view>
+#include <system_error>
+#include <thread>
+#include <type_traits>
+#include <vector>
+
+#include "common/cli.hpp"
+#include "common/csv_writer.hpp"
+#include "common/estimation.hpp"
+#include "common/experiment.hpp"
+#include "common/format.hpp"
+#include "common/plant.hpp"
+#include "common/plot.hpp"
+#include "common/report.hpp"
+#include "common/statistics.hpp"
+
+namespace mjukf::examples {
+
+/// The most runs (seeds × scenarios) one study may have: each keeps a few numbers per filter, but a
+/// typo such as 1-10000000000 should be refused, not attempted.
+constexpr std::size_t kMaxStudyRuns = 1'000'000;
+
+/// A run diverged when a final parameter error exceeds this multiple of its scale (see divergedRun()).
+constexpr double kDivergenceBound = 1.0;
+
+namespace detail {
+
+/// "1-100", "7", "1,5,9-12": the seeds in the order given; refuses an empty list, a descending or
+/// malformed range, a repeated seed, and more than kMaxStudyRuns seeds.
+inline std::vector<std::uint64_t> parseSeeds(const std::string& text) {
+  const auto bad = [&](const std::string& why) {
+    return UsageError("--seeds needs seeds or ranges like 1-100 or 1,5,9-12 (" + why + "), not '" + text + "'");
+  };
+  const auto number = [&](std::string_view word) {
+    std::uint64_t value = 0;
+    const auto [end, error] = std::from_chars(word.data(), word.data() + word.size(), value);
+    if (word.empty() || error != std::errc() || end != word.data() + word.size()) throw bad("'" + std::string(word) + "' is not a seed");
+    return value;
+  };
+  std::vector<std::uint64_t> seeds;
+  std::set<std::uint64_t> seen;
+  std::string_view rest = text;
+  while (!rest.empty() || seeds.empty()) {
+    const std::size_t comma = rest.find(',');
+    const std::string_view item = rest.substr(0, comma);
+    const std::size_t dash = item.find('-');
+    const std::uint64_t first = number(item.substr(0, dash));
+    const std::uint64_t last = dash == std::string_view::npos ? first : number(item.substr(dash + 1));
+    if (last < first) throw bad("the range " + std::string(item) + " runs backwards");
+    if (last - first >= kMaxStudyRuns || seeds.size() + (last - first) >= kMaxStudyRuns)
+      throw bad("more than " + std::to_string(kMaxStudyRuns) + " seeds");
+    for (std::uint64_t seed = first;; ++seed) {
+      if (!seen.insert(seed).second) throw bad("seed " + std::to_string(seed) + " is given twice");
+      seeds.push_back(seed);
+      if (seed == last) break;
+    }
+    if (comma == std::string_view::npos) break;
+    rest.remove_prefix(comma + 1);
+    if (rest.empty()) throw bad("a trailing comma");
+  }
+  return seeds;
+}
+
+template <class Settings, class = void>
+struct HasAutomaticModes : std::false_type {};
+template <class Settings>
+struct HasAutomaticModes<Settings, std::void_t<decltype(std::declval<Settings&>().automaticTransformation = true,
+                                                        std::declval<Settings&>().adaptiveScaling = true)>>
+    : std::true_type {};
+
+/// A filter of the study: the preset of `kind`, with MJUKF's automatic T and adaptive ξ where `automatic`.
+struct StudyFilter {
+  std::string name;
+  FilterKind kind;
+  bool automatic;
+};
+
+/// The filters a study can run on `Model`: mjukf-auto only where MJUKF's settings have the automatic
+/// modes (automaticTransformation, adaptiveScaling).
+template <class Model>
+std::vector<StudyFilter> studyFilters() {
+  std::vector<StudyFilter> filters{{"jukf", FilterKind::JointUkf, false},
+                                   {"mjukf", FilterKind::ModifiedJointUkf, false},
+                                   {"dual", FilterKind::DualUkf, false}};
+  if constexpr (HasAutomaticModes<ModifiedJointUkfSettings<Model>>::value)
+    filters.push_back({"mjukf-auto", FilterKind::ModifiedJointUkf, true});
+  return filters;
+}
+
+/// Splits a comma-separated list of names and looks each up in `choices`, refusing unknown names,
+/// repeats and an empty list, naming `flag`.
+template <class Choice>
+std::vector<Choice> parseChoices(const std::string& flag, const std::string& text, const std::vector<Choice>& choices) {
+  std::string known;
+  for (const auto& c : choices) known += (known.empty() ? "" : ", ") + c.name;
+  std::vector<Choice> chosen;
+  std::string_view rest = text;
+  for (;;) {
+    const std::size_t comma = rest.find(',');
+    const std::string name(rest.substr(0, comma));
+    const Choice* found = nullptr;
+    for (const auto& c : choices)
+      if (c.name == name) found = &c;
+    if (found == nullptr) throw UsageError(flag + " takes a comma-separated list of " + known + ", not '" + name + "'");
+    for (const auto& c : chosen)
+      if (c.name == name) throw UsageError(flag + " names '" + name + "' twice");
+    chosen.push_back(*found);
+    if (comma == std::string_view::npos) break;
+    rest.remove_prefix(comma + 1);
+  }
+  return chosen;
+}
+
+/// A scenario of the study: the true parameters over time, the length of the run and, for the
+/// parameter change, the ξ the hand-tuned MJUKF takes there.
+template <class Param>
+struct StudyScenario {
+  std::string name;
+  TrueParameters<Param> truth;
+  double duration;
+  std::optional<double> scaling;
+};
+
+template <class Plant>
+std::vector<StudyScenario<typename Plant::Param>> studyScenarios() {
+  using Experiment = typename Plant::Experiment;
+  std::vector<StudyScenario<typename Plant::Param>> scenarios{
+      {"static", {Experiment::Model::trueParameters()}, double(Experiment::duration), std::nullopt}};
+  if (const auto change = Plant::parameterChange())
+    scenarios.push_back({"change",
+                         {Experiment::Model::trueParameters(), change->after, change->at},
+                         change->duration,
+                         change->scaling});
+  return scenarios;
+}
+
+/// What the study keeps of one filter's run.
+template <int ParamDim>
+struct StudyResult {
+  std::array<double, ParamDim> rmse{};
+  std::array<double, ParamDim> finalEstimate{};
+  bool diverged = false;
+  Status status = Status::Ok;
+  long stoppedAtRow = 0;  ///< the refused row, or the last row when the run went through
+  long repairs = 0;
+  long rejected = 0;
+};
+
+/// Diverged: the filter refused a step (the run stopped early), or a final parameter estimate is not
+/// finite, or for some i the final error |θ̂ᵢ − θᵢ| exceeds kDivergenceBound × the larger of |θᵢ| and
+/// the first guess's error |θ̂ᵢ₀ − θᵢ(0)|: the estimate ended farther from the truth than it started
+/// and than the truth's own size. (A noisy estimate of a small parameter is not counted as diverged.)
+template <class Model>
+bool divergedRun(const EstimateRun<Model>& run, const PlantData<Model>& data, const typename Model::Param& firstGuess) {
+  if (run.outcome.status != Status::Ok || run.parameters.size() != data.parameterTruth.size()) return true;
+  const auto& estimate = run.parameters.back();
+  const auto& truth = data.parameterTruth.back();
+  for (int i = 0; i < Model::ParamDim; ++i) {
+    const double scale = std::max(std::abs(truth(i)), std::abs(firstGuess(i) - data.parameterTruth.front()(i)));
+    if (!std::isfinite(estimate(i)) || !(std::abs(estimate(i) - truth(i)) <= kDivergenceBound * scale)) return true;
+  }
+  return false;
+}
+
+/// The setup of `filter` in `scenario`: the experiment's preset, the scenario's ξ for MJUKF, and for
+/// mjukf-auto the automatic modes on top of the hand-tuned preset.
+template <class Experiment, class Param>
+FilterSetup<Experiment> studySetup(const StudyFilter& filter, const StudyScenario<Param>& scenario) {
+  auto setup = FilterSetup<Experiment>::paper(filter.kind);
+  if (scenario.scaling) setup.modifiedJointUkf.scaling = *scenario.scaling;
+  if constexpr (HasAutomaticModes<decltype(setup.modifiedJointUkf)>::value) {
+    if (filter.automatic) {
+      setup.modifiedJointUkf.automaticTransformation = true;
+      setup.modifiedJointUkf.adaptiveScaling = true;
+    }
+  }
+  return setup;
+}
+
+/// Runs work(0) … work(count − 1) on `jobs` threads, calling progress(done) about once a second from
+/// this thread while they run. The first exception of any work item is rethrown once all threads stop.
+template <class Work, class Progress>
+void runInParallel(std::size_t count, unsigned jobs, Work&& work, Progress&& progress) {
+  std::atomic<std::size_t> next{0}, done{0};
+  std::exception_ptr failure;
+  std::mutex mutex;
+  std::condition_variable finished;
+  const auto worker = [&] {
+    for (std::size_t i; (i = next++) < count;) {
+      try {
+        work(i);
+      } catch (...) {
+        const std::lock_guard<std::mutex> lock(mutex);
+        if (!failure) failure = std::current_exception();
+        next = count;  // start no more work
+      }
+      {
+        const std::lock_guard<std::mutex> lock(mutex);
+        ++done;
+      }
+      finished.notify_one();
+    }
+  };
+  std::vector<std::thread> threads;
+  for (unsigned j = 1; j < jobs && j < count; ++j) threads.emplace_back(worker);
+  std::thread last(worker);
+  {
+    std::unique_lock<std::mutex> lock(mutex);
+    while (!finished.wait_for(lock, std::chrono::seconds(1), [&] { return done == count || failure; }))
+      progress(done.load());
+  }
+  last.join();
+  for (auto& thread : threads) thread.join();
+  if (failure) std::rethrow_exception(failure);
+}
+
+inline std::string rmseColumn(const Quantity& q) { return std::string("rmse_") + q.name; }
+
+/// Box plots of each parameter's RMSE per filter in `scenario`, from the study's CSV, leaving out the
+/// diverged runs; a filter none of whose runs is left (`shown[f]` false) gets no box, as gnuplot
+/// refuses a plot without a point.
+template <class Plant>
+bool drawStudyPlot(Plotter& plotter, const std::string& png, const std::string& csv, const std::string& scenario,
+                   const std::vector<StudyFilter>& filters, const std::vector<bool>& shown, int divergedColumn) {
+  constexpr int p = static_cast<int>(Plant::parameters.size());
+  std::string tics;
+  for (std::size_t f = 0; f < filters.size(); ++f)
+    tics += format("%s\"%s%s\" %zu", f > 0 ? ", " : "", filters[f].name.c_str(), shown[f] ? "" : " (all diverged)", f + 1);
+  std::string s = "set datafile separator ','\nset grid ytics\nset style fill solid 0.25 border -1\n";
+  s += "set style boxplot outliers pointtype 7\nset style data boxplot\nset boxwidth 0.5\nunset key\n";
+  s += format("set xtics (%s)\nset xrange [0.4:%zu.6]\n", tics.c_str(), filters.size());
+  s += format("set multiplot layout 1,%d title \"%s, %s: parameter RMSE per run over seeds (diverged runs left out)\" font ',12'\n",
+              p, Plant::title, scenario.c_str());
+  for (int i = 0; i < p; ++i) {
+    const Quantity& q = Plant::parameters[std::size_t(i)];
+    s += format("set title \"%s\"\nset ylabel \"RMSE %s (%s)\"\n", q.label, q.label, q.unit);
+    std::string plot;
+    for (std::size_t f = 0; f < filters.size(); ++f)
+      if (shown[f])
+        plot += format("%s%s skip 1 using (%zu):((strcol(2) eq \"%s\" && strcol(3) eq \"%s\" && column(%d) == 0) ? column(%d) : NaN) lc %zu",
+                       plot.empty() ? "plot " : ", \\\n     ", gnuplotQuote(csv).c_str(), f + 1, filters[f].name.c_str(),
+                       scenario.c_str(), divergedColumn, 4 + i, f + 1);
+    s += (plot.empty() ? "set yrange [0:1]\nplot 2 notitle" : plot) + "\n";
+  }
+  s += "unset multiplot\n";
+  return plotter.drawScript(png, 420 * p + 100, 500, {&csv}, s);
+}
+
+}  // namespace detail
+
+/// study [--seeds LIST] [--filters LIST] [--scenarios LIST] [--jobs N] [--out-dir DIR] [--duration S]
+template <class Plant>
+int studyCommand(const std::vector<std::string>& words) {
+  using Experiment = typename Plant::Experiment;
+  using Model = typename Experiment::Model;
+  using detail::format;
+  namespace fs = std::filesystem;
+  constexpr int p = Model::ParamDim;
+  const Arguments args(words, {"--seeds", "--filters", "--scenarios", "--jobs", "--out-dir", "--duration"});
+  const auto seeds = detail::parseSeeds(args.text("--seeds", "1-20"));
+  const auto allFilters = detail::studyFilters<Model>();
+  const auto filters =
+      detail::parseChoices("--filters", args.text("--filters", allFilters.size() > 3 ? "jukf,mjukf,mjukf-auto" : "jukf,mjukf"),
+                           allFilters);
+  const auto scenarios = detail::parseChoices("--scenarios", args.text("--scenarios", "static"),
+                                              detail::studyScenarios<Plant>());
+  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+  const auto jobs = static_cast<unsigned>(args.integer("--jobs", cores, 1, 1024));
+  if (args.has("--duration"))  // one length for every scenario: for short trials and tests
+    requireSimulationDuration("--duration", args.number("--duration", 0), Experiment::stepSize);
+  const std::string outDir = args.text("--out-dir", std::string("study_") + Plant::slug);
+  if (seeds.size() * scenarios.size() > kMaxStudyRuns)
+    throw UsageError("--seeds and --scenarios make more than " + std::to_string(kMaxStudyRuns) + " runs");
+
+  // The output directory is checked before any run, so that a long study cannot fail at its end.
+  std::error_code error;
+  fs::create_directories(outDir, error);
+  const auto path = [&](const std::string& name) { return (fs::path(outDir) / (std::string(Plant::slug) + "_" + name)).string(); };
+  const std::string csvPath = path("study.csv");
+  if (error || !std::ofstream(csvPath))
+    throw UsageError("--out-dir " + outDir + ": cannot " + (error ? "create the directory: " + error.message() : "write " + csvPath));
+
+  // Run r is scenario r / seeds, seed r % seeds; results[r][f] is filter f's result on it.
+  const std::size_t runs = seeds.size() * scenarios.size();
+  std::vector<std::vector<detail::StudyResult<p>>> results(runs);
+  const auto start = std::chrono::steady_clock::now();
+  const auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+  const bool terminal = isatty(STDERR_FILENO) != 0;
+  bool progressShown = false;
+  detail::runInParallel(
+      runs, jobs,
+      [&](std::size_t r) {
+        const auto& scenario = scenarios[r / seeds.size()];
+        auto options = experimentSimulation<Experiment>(seeds[r % seeds.size()], scenario.truth);
+        options.duration = args.has("--duration") ? args.number("--duration", 0) : scenario.duration;
+        const auto data = simulateExperiment<Experiment>(options);
+        const long rmseFrom = Experiment::rmseFromRow < data.rows() ? Experiment::rmseFromRow : 0;
+        for (const auto& filter : filters) {
+          const auto setup = detail::studySetup<Experiment>(filter, scenario);
+          const auto run = runFilter(Model(), setup, data);
+          detail::StudyResult<p> result;
+          const auto rmse = parameterRmse(run, data, rmseFrom);
+          for (int i = 0; i < p; ++i) {
+            result.rmse[std::size_t(i)] = rmse(i);
+            result.finalEstimate[std::size_t(i)] = run.parameters.empty() ? std::nan("") : run.parameters.back()(i);
+          }
+          result.diverged = detail::divergedRun(run, data, setup.initialParameters);
+          result.status = run.outcome.status;
+          result.stoppedAtRow = run.outcome.row;
+          result.repairs = run.outcome.repairs;
+          result.rejected = run.outcome.rejected;
+          results[r].push_back(result);
+        }
+      },
+      [&](std::size_t done) {
+        const double seconds = elapsed();
+        std::cerr << (terminal ? "\r" : "")
+                  << format("study: %zu/%zu runs done, %.0f s, about %.0f s left", done, runs, seconds,
+                            done > 0 ? seconds * double(runs - done) / double(done) : 0.0)
+                  << (terminal ? "" : "\n") << std::flush;
+        progressShown = true;
+      });
+  if (progressShown) std::cerr << (terminal ? "\n" : "") << format("study: %zu runs in %.1f s\n", runs, elapsed());
+
+  // The CSV, one row per scenario × seed × filter, in that order.
+  std::vector<std::string> header{"seed", "filter", "scenario"};
+  for (const auto& q : Plant::parameters) header.push_back(detail::rmseColumn(q));
+  header.insert(header.end(), {"diverged", "status", "stopped_at_row", "repairs", "rejected"});
+  for (const auto& q : Plant::parameters) header.push_back(std::string("final_") + q.name);
+  const int divergedColumn = 4 + p;
+  {
+    CsvWriter csv(csvPath, header);
+    for (std::size_t r = 0; r < runs; ++r)
+      for (std::size_t f = 0; f < filters.size(); ++f) {
+        const auto& result = results[r][f];
+        csv << std::to_string(seeds[r % seeds.size()]) << filters[f].name << scenarios[r / seeds.size()].name;
+        for (double v : result.rmse) csv << v;
+        csv << double(result.diverged) << std::string(toString(result.status)) << double(result.stoppedAtRow)
+            << double(result.repairs) << double(result.rejected);
+        for (double v : result.finalEstimate) csv << v;
+        csv.endRow();
+      }
+    csv.close();
+  }
+
+  // The table: per scenario and filter, mean ± sd and median of each parameter's RMSE over the runs
+  // that did not diverge, and how many diverged.
+  detail::Report report;
+  const auto say = [&](const std::string& line) { report.say(line); };
+  say(format("%s: study over %zu seeds (%s), RMSE over rows >= %ld; statistics over the runs that did not diverge",
+             Plant::title, seeds.size(), args.text("--seeds", "1-20").c_str(), Experiment::rmseFromRow));
+  say(format("diverged: the filter refused a step, or a final estimate is not finite or off by more than %g x the larger",
+             kDivergenceBound));
+  say("  of the truth and the first guess's error");
+  Plotter plotter;
+  std::vector<std::string> written{csvPath};
+  for (std::size_t s = 0; s < scenarios.size(); ++s) {
+    say("");
+    say(format("scenario %s", scenarios[s].name.c_str()));
+    std::string head = format("%-11s", "filter");
+    for (const auto& q : Plant::parameters)
+      head += format(" %-30s %-11s", ("RMSE " + std::string(q.name) + " mean +- sd").c_str(), "median");
+    say(head + " diverged");
+    std::vector<bool> shown;  // whether the filter has a run that did not diverge, for the box plot
+    for (std::size_t f = 0; f < filters.size(); ++f) {
+      std::string line = format("%-11s", filters[f].name.c_str());
+      long diverged = 0;
+      for (int i = 0; i < p; ++i) {
+        std::vector<double> values;
+        for (std::size_t k = 0; k < seeds.size(); ++k) {
+          const auto& result = results[s * seeds.size() + k][f];
+          if (!result.diverged) values.push_back(result.rmse[std::size_t(i)]);
+        }
+        diverged = long(seeds.size() - values.size());
+        line += values.empty() ? format(" %-30s %-11s", "-", "-")
+                               : format(" %-30s %-11.4g",
+                                        format("%.4g +- %.3g", detail::mean(values), detail::standardDeviation(values)).c_str(),
+                                        detail::median(values));
+      }
+      say(line + format(" %ld/%zu", diverged, seeds.size()));
+      shown.push_back(diverged < long(seeds.size()));
+    }
+    const std::string png = path("study_" + scenarios[s].name + ".png");
+    if (detail::drawStudyPlot<Plant>(plotter, png, csvPath, scenarios[s].name, filters, shown, divergedColumn))
+      written.push_back(png);
+  }
+  report.finish(path("study_table.txt"), written);
+  return kExitOk;
+}
+
+}  // namespace mjukf::examples

@@ -1,0 +1,313 @@
+// MJUKF's automatic modes (docs/tuning-mjukf.md): T from the sensitivities (eqs. 14–15) against the
+// analytic one on the tank, convergence and tracking with the one default knob, validation of the
+// new settings, and the paper's defaults untouched.
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "mjukf/integrators/i_tr_bdf2.hpp"
+#include "mjukf/integrators/rk4.hpp"
+#include "mjukf/models/van_der_pol.hpp"
+#include "mjukf/modified_joint_ukf.hpp"
+#include "mjukf/paper/experiments.hpp"
+#include "mjukf/paper/schedule.hpp"
+#include "mjukf/simulation.hpp"
+#include "robustness_support.hpp"
+#include "test_support.hpp"
+
+namespace {
+
+using mjukf::Status;
+using Tank = mjukf::paper::CoupledTankExperiment<double>;
+using Robot = mjukf::paper::FlexibleJointExperiment<double>;
+
+template <class Settings>
+Settings automatic(Settings s) {
+  s.automaticTransformation = true;
+  s.adaptiveScaling = true;
+  return s;
+}
+
+// y_k = x_k + white noise of standard deviation `noise` per component (none for 0), x from `simulate` with
+// `parameterAt(k)`; the truth θ_k beside it.
+template <class Model, class Integrator, class ParameterAt>
+void simulateNoisy(const Model& model, const Integrator& integrator, const typename Model::State& x0,
+                   ParameterAt&& parameterAt, double h, long steps, double noise, std::vector<typename Model::Meas>& y,
+                   std::vector<typename Model::Param>& truth) {
+  std::mt19937_64 random(7);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  y.resize(static_cast<std::size_t>(steps + 1));
+  truth.resize(y.size());
+  mjukf::simulate(model, integrator, x0, parameterAt, 0.0, h, steps, [&](long k, double, const auto& x) {
+    for (int j = 0; j < Model::MeasDim; ++j) y[static_cast<std::size_t>(k)](j) = x(j) + (noise > 0 ? noise * normal(random) : 0.0);
+    truth[static_cast<std::size_t>(k)] = parameterAt(k);
+  });
+}
+
+// The tank: y = x and k_flow enters ḣ₁ = (k_flow u − c₁√h₁)/A₁ linearly. Differentiating the
+// integrator's step by hand is the same as integrating the variational system ṡ = (∂f/∂x) s + ∂f/∂k
+// beside x with the same explicit method (every stage is an affine combination of evaluations of f,
+// and the chain rule goes through each), so this is the exact derivative of the filter's one-step
+// map Φ_h at (x̂, θ₀), the point the filter differentiates about (sigma point 0 and its θ₀).
+Eigen::Vector2d analyticTankSensitivity(const Tank::Model& m, const Eigen::Vector2d& x0, double k, double h) {
+  using Augmented = Eigen::Vector4d;  // (h₁, h₂, ∂h₁/∂k, ∂h₂/∂k)
+  const double u = m.pumpVoltage;
+  const auto f = [&](double, const Augmented& z) {
+    const double r1 = std::sqrt(z(0)), r2 = std::sqrt(z(1));
+    Augmented dz;
+    dz(0) = (k * u - m.orifice1 * r1) / m.area1;
+    dz(1) = (m.orifice1 * r1 - m.orifice2 * r2) / m.area2;
+    const double d11 = -m.orifice1 / (2 * r1 * m.area1);
+    const double d21 = m.orifice1 / (2 * r1 * m.area2), d22 = -m.orifice2 / (2 * r2 * m.area2);
+    dz(2) = d11 * z(2) + u / m.area1;
+    dz(3) = d21 * z(2) + d22 * z(3);
+    return dz;
+  };
+  const Augmented z0(x0(0), x0(1), 0, 0);
+  const Augmented z1 = mjukf::ITrBdf2<double>().step(f, 0.0, z0, h);
+  return z1.tail<2>();
+}
+
+TEST(AutomaticTransformation, EqualsTheAnalyticOneOnTheTank) {
+  const Tank::Model model;
+  const Eigen::Vector2d x0(5.0, 3.0);  // levels well above the orifices: √h smooth around every point
+  const double h = Tank::stepSize;
+  auto settings = Tank::modifiedJointUkf();
+  settings.automaticTransformation = true;  // ξ stays the paper's −1
+  mjukf::ModifiedJointUkf<Tank::Model> filter(model, x0, Tank::initialParameters(), settings);
+  const double theta0 = filter.parameterPoints()(0, 0);
+  ASSERT_EQ(filter.timeUpdate(0.0, h), Status::Ok);
+  ASSERT_EQ(filter.measurementUpdate(Eigen::Vector2d(5.01, 3.0)), Status::Ok);
+
+  const Eigen::Vector2d exact = analyticTankSensitivity(model, x0, theta0, h);
+  // W⁻ = D = (Φ(x̂, θ₀ + δ) − Φ(x̂, θ₀)) / δ, then ψ = (g(x̂⁻ + δ W⁻) − g(x̂⁻)) / δ with g = x. Each
+  // difference rounds by about ε max|x| / δ per evaluated state (a handful of operations of a few ulps
+  // each: 8 ε |x| bounds it), δ = √ε max(|θ|, ...) ≥ √ε |θ₀|; truncation is δ/2 |∂²Φ/∂k²|, which is
+  // O(h² u² / A²) × |∂²f/∂h₁²| ≈ 1e-7 × 1e-2 × δ: below the rounding. So |ψ − exact| ≤ 2 × 8 ε |x| / δ.
+  const double eps = std::numeric_limits<double>::epsilon();
+  const double delta = std::sqrt(eps) * std::abs(theta0);
+  const double tolerance = 2 * 8 * eps * x0.cwiseAbs().maxCoeff() / delta;
+  const Eigen::Vector2d psi = filter.sensitivity().measurementSensitivity().col(0);
+  std::printf("psi (%.12g, %.12g), analytic (%.12g, %.12g), tolerance %.3g\n", psi(0), psi(1), exact(0), exact(1),
+              tolerance);
+  EXPECT_NEAR(psi(0), exact(0), tolerance);
+  EXPECT_NEAR(psi(1), exact(1), tolerance);
+  EXPECT_GT(exact(0), 100 * tolerance) << "the test would not see a wrong sensitivity";
+
+  // Eq. 14: the row normalised, T = ψ̃ᵀ / Σ|ψ̃| with ψ̃ⱼ = ψⱼ / √Rⱼⱼ (R is a multiple of I here), so T's
+  // error is at most 2 |ψ − exact|₁ / |exact|₁.
+  const Eigen::RowVector2d expectedT = exact.transpose() / exact.cwiseAbs().sum();
+  const double tTolerance = 2 * 2 * tolerance / exact.cwiseAbs().sum();
+  EXPECT_NEAR(filter.transformation()(0, 0), expectedT(0), tTolerance);
+  EXPECT_NEAR(filter.transformation()(0, 1), expectedT(1), tTolerance);
+  EXPECT_NEAR(filter.transformation().row(0).sum(), 1.0, tTolerance);  // both sensitivities positive
+  EXPECT_DOUBLE_EQ(filter.scalings()(0), -1.0);                          // adaptiveScaling off: the setting
+}
+
+// The sign convention (docs/tuning-mjukf.md): eq. 9 moves θ̂ by −ξ T (y − Ȳ), and y − Ȳ ≈ ψ (θ − θ̂)
+// with ψ = ∂ŷ/∂θ̂, so θ̂ approaches θ when ξ (T ψ) < 0. On the tank T = [0.8 0.2] ≥ 0 and ψ > 0 (a larger
+// k_flow fills the tanks faster): ξ = −1 (the paper's) must approach the truth from k̂ = 2, ξ = +1 must
+// move away from it. Noise-free data, 20 s.
+TEST(ScalingSign, NegativeXiForAMeasurementThatRisesWithTheParameter) {
+  const Tank::Model model;
+  const double h = Tank::stepSize;
+  const long steps = 20000;
+  std::vector<Tank::Model::Meas> y;
+  std::vector<Tank::Param> truth;
+  simulateNoisy(model, mjukf::ITrBdf2<double>(), Tank::initialState(), [](long) { return Tank::Model::trueParameters(); },
+                h, steps, 0.0, y, truth);
+  const auto finalError = [&](double xi) {
+    auto s = Tank::modifiedJointUkf();
+    s.scaling = xi;
+    mjukf::ModifiedJointUkf<Tank::Model> filter(model, Tank::initialState(), Tank::initialParameters(), s);
+    const auto outcome = mjukf::paper::runSchedule(
+        filter, steps + 1, h, Tank::measurementEvery,
+        [&](long k) -> const Tank::Model::Meas& { return y[static_cast<std::size_t>(k)]; }, [](long, const auto&) {});
+    return outcome.status == Status::Ok ? std::abs(filter.parameters()(0) - 6.0)
+                                        : std::numeric_limits<double>::infinity();
+  };
+  const double start = std::abs(Tank::initialParameters()(0) - 6.0);  // 4
+  const double negative = finalError(-1.0), positive = finalError(+1.0);
+  std::printf("|k - 6| after 20 s: xi = -1: %.3g, xi = +1: %.3g (start %.3g)\n", negative, positive, start);
+  EXPECT_LT(negative, 0.1 * start);
+  EXPECT_GT(positive, start);
+}
+
+// Van der Pol (the 2019 paper's case): from μ̂₀ = 5 against μ = 0.2, noise 0.1 on both states. The
+// automatic modes with their defaults must bring μ̂ to the truth; "converged" means the RMSE over the
+// second half of the run is below 0.05, a quarter of μ itself (a filter that stays at μ̂₀ has 4.8, one
+// that diverges is refused or far above).
+TEST(AutomaticModes, ConvergeOnVanDerPol) {
+  using Model = mjukf::models::VanDerPol<double>;
+  using Integrator = mjukf::Rk4<double>;
+  const Model model;
+  const double h = 0.1;
+  const long steps = 1000;
+  std::vector<Model::Meas> y;
+  std::vector<Model::Param> truth;
+  simulateNoisy(model, Integrator(), Model::State(1.4, 0.0), [](long) { return Model::trueParameters(); }, h, steps,
+                0.1, y, truth);
+  mjukf::ModifiedJointUkfSettings<Model> s;
+  s.initialCovariance.diagonal().setConstant(5);
+  s.processNoise.diagonal().setConstant(1e-3);
+  s.measurementNoise.diagonal().setConstant(0.1);
+  s.parameterSpread << 0.5;
+  mjukf::ModifiedJointUkf<Model, Integrator> filter(model, Model::State(0, 5), Model::Param(5.0), automatic(s));
+  double sum = 0;
+  long count = 0;
+  const auto outcome = mjukf::paper::runSchedule(
+      filter, steps + 1, h, 1, [&](long k) -> const Model::Meas& { return y[static_cast<std::size_t>(k)]; },
+      [&](long k, const auto& f) {
+        if (k < steps / 2) return;
+        sum += std::pow(f.parameters()(0) - 0.2, 2);
+        ++count;
+      });
+  ASSERT_EQ(outcome.status, Status::Ok) << "stopped at row " << outcome.row;
+  std::printf("RMSE of mu over the second half: %.4g\n", std::sqrt(sum / double(count)));
+  EXPECT_LT(std::sqrt(sum / double(count)), 0.05);
+}
+
+// The robot's parameter-change run (the paper's Figs. 12–14): (K_τ, m) = (0.15, 0.21) until t = 5 s,
+// then (0.10, 0.30). With the default convergenceTime (5 s) both estimates must have covered 90 % of
+// the change 20 s after it (four time constants would cover 98 %), and must not have overshot it by
+// more than 10 % on the way (the fixed ξ swings K̂_τ to about −0.2).
+TEST(AutomaticModes, TrackTheRobotsParameterChange) {
+  const Robot::Model model;
+  const double h = Robot::stepSize;
+  const long steps = 25000;
+  const Robot::Param before = Robot::Model::trueParameters(), after(0.10, 0.30);
+  std::vector<Robot::Model::Meas> y;
+  std::vector<Robot::Param> truth;
+  simulateNoisy(model, mjukf::ITrBdf2<double>(), Robot::initialState(),
+                [&](long k) { return double(k) * h >= 5.0 ? after : before; }, h, steps, 0.03, y, truth);
+  mjukf::ModifiedJointUkf<Robot::Model> filter(model, Robot::initialState(), Robot::initialParameters(),
+                                               automatic(Robot::modifiedJointUkf()));
+  Robot::Param lowest = Robot::Param::Constant(1e9), highest = -lowest;
+  const auto outcome = mjukf::paper::runSchedule(
+      filter, steps + 1, h, Robot::measurementEvery,
+      [&](long k) -> const Robot::Model::Meas& { return y[static_cast<std::size_t>(k)]; },
+      [&](long k, const auto& f) {
+        if (double(k) * h < 5.0) return;
+        lowest = lowest.cwiseMin(f.parameters());
+        highest = highest.cwiseMax(f.parameters());
+      });
+  ASSERT_EQ(outcome.status, Status::Ok) << "stopped at row " << outcome.row;
+  const Robot::Param change = after - before;  // (−0.05, +0.09)
+  const Robot::Param covered = (filter.parameters() - before).cwiseQuotient(change);
+  std::printf("covered %.3f %.3f, K_tau min %.4f, m max %.4f\n", covered(0), covered(1), lowest(0), highest(1));
+  EXPECT_GT(covered(0), 0.9) << filter.parameters().transpose();
+  EXPECT_GT(covered(1), 0.9) << filter.parameters().transpose();
+  EXPECT_GT(lowest(0), after(0) - 0.1 * std::abs(change(0)));  // K_τ falls: no undershoot below 0.095
+  EXPECT_LT(highest(1), after(1) + 0.1 * std::abs(change(1)));  // m rises: no overshoot above 0.309
+}
+
+// Off by default, and while off the new settings change nothing: a run with them set to other values
+// is bit for bit the paper's.
+TEST(AutomaticModes, OffTheNewSettingsChangeNothing) {
+  auto other = Tank::modifiedJointUkf();
+  other.convergenceTime = 0.5;
+  other.sensitivityInterval = 3;
+  mjukf::ModifiedJointUkf<Tank::Model> paper(Tank::Model(), Tank::initialState(), Tank::initialParameters(),
+                                             Tank::modifiedJointUkf());
+  mjukf::ModifiedJointUkf<Tank::Model> changed(Tank::Model(), Tank::initialState(), Tank::initialParameters(), other);
+  EXPECT_FALSE(Tank::modifiedJointUkf().automaticTransformation);
+  EXPECT_FALSE(Tank::modifiedJointUkf().adaptiveScaling);
+  const Tank::Model::Meas y(1.0, 0.5);
+  for (int k = 0; k < 200; ++k) {
+    ASSERT_EQ(paper.timeUpdate(k * Tank::stepSize, Tank::stepSize), Status::Ok);
+    ASSERT_EQ(changed.timeUpdate(k * Tank::stepSize, Tank::stepSize), Status::Ok);
+    ASSERT_EQ(paper.measurementUpdate(y), Status::Ok);
+    ASSERT_EQ(changed.measurementUpdate(y), Status::Ok);
+  }
+  EXPECT_TRUE(mjukf::testing::sameFilter(paper, changed));
+  EXPECT_NE(paper.parameters()(0), Tank::initialParameters()(0)) << "the run did move the parameter";
+}
+
+// The robot whose derivative is NaN away from `*centre` while `*armed` (pointers: the filter keeps a
+// copy of the model): the sigma points fail, while the propagations of the sensitivities, about the
+// mean, succeed.
+struct FlakyRobot : Robot::Model {
+  const bool* armed = nullptr;
+  const Robot::Model::State* centre = nullptr;
+  State derivative(double t, const State& x, const Input& u, const Param& theta) const {
+    if (*armed && (x - *centre).cwiseAbs().maxCoeff() > 1e-3) return State::Constant(std::nan(""));
+    return Robot::Model::derivative(t, x, u, theta);
+  }
+};
+
+// A time update refused after the automatic modes computed their candidates (W from the propagations
+// about the mean) leaves W, ψ, the information, T and ξ as they were, and the next steps are bit for bit
+// those of a filter that never saw the refused call. (The typed failure-policy tests run the automatic
+// mode through the other refusals.)
+TEST(AutomaticModes, RefusedStepsLeaveTheAdaptiveStateUnchanged) {
+  bool armed = false;
+  Robot::Model::State centre = Robot::Model::State::Zero();
+  FlakyRobot model;
+  model.armed = &armed;
+  model.centre = &centre;
+  mjukf::ModifiedJointUkf<FlakyRobot> filter(
+      model, Robot::initialState(), Robot::initialParameters(),
+      mjukf::testing::rebindSettings<FlakyRobot>(automatic(Robot::modifiedJointUkf())));
+  const double h = Robot::stepSize;
+  const Robot::Model::Meas y = Robot::Model::Meas::Constant(0.02);
+  for (int k = 0; k < 50; ++k) {
+    ASSERT_EQ(filter.timeUpdate(2 * k * h, h), Status::Ok);
+    ASSERT_EQ(filter.measurementUpdate(y), Status::Ok);
+    ASSERT_EQ(filter.propagateMean((2 * k + 1) * h, h), Status::Ok);
+  }
+  ASSERT_GT(filter.sensitivity().stateSensitivity().cwiseAbs().maxCoeff(), 0.0);
+  ASSERT_GT(filter.sensitivity().measurementSensitivity().cwiseAbs().maxCoeff(), 0.0);
+  const auto untouched = filter;
+  centre = filter.state();
+  armed = true;
+  EXPECT_EQ(filter.timeUpdate(100 * h, h), Status::NonFiniteResult);
+  armed = false;
+  EXPECT_TRUE(mjukf::testing::sameFilter(filter, untouched));
+  auto other = untouched;
+  for (auto* f : {&filter, &other}) {
+    ASSERT_EQ(f->propagateMean(100 * h, h), Status::Ok);  // the open-loop time counts in W's extrapolation
+    ASSERT_EQ(f->timeUpdate(101 * h, h), Status::Ok);
+    ASSERT_EQ(f->measurementUpdate(y), Status::Ok);
+  }
+  EXPECT_TRUE(mjukf::testing::sameFilter(filter, other));
+}
+
+TEST(AutomaticModes, SettingsAreValidated) {
+  const auto construct = [](const auto& s) {
+    mjukf::ModifiedJointUkf<Robot::Model>(Robot::Model(), Robot::initialState(), Robot::initialParameters(), s);
+  };
+  const auto expectRejected = [&](const auto& s, const std::string& setting) {
+    try {
+      construct(s);
+      ADD_FAILURE() << "accepted a bad '" << setting << "'";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(setting), std::string::npos) << e.what();
+    }
+  };
+  for (double bad : {0.0, -1.0, std::numeric_limits<double>::infinity(), std::nan("")}) {
+    auto s = automatic(Robot::modifiedJointUkf());
+    s.convergenceTime = bad;
+    expectRejected(s, "convergenceTime");
+  }
+  auto s = automatic(Robot::modifiedJointUkf());
+  s.sensitivityInterval = -1;
+  expectRejected(s, "sensitivityInterval");
+  // The filter's own T is used: a T that does not sum to 1 per row is not an error then.
+  s = automatic(Robot::modifiedJointUkf());
+  s.transformation.setZero();
+  EXPECT_NO_THROW(construct(s));
+  s.automaticTransformation = false;
+  expectRejected(s, "transformation (T)");
+  // Off, convergenceTime is not used and not checked.
+  auto off = Robot::modifiedJointUkf();
+  off.convergenceTime = 0;
+  EXPECT_NO_THROW(construct(off));
+}
+
+}  // namespace
