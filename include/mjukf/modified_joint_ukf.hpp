@@ -72,7 +72,9 @@ struct ModifiedJointUkfSettings
 ///
 /// with Yᵢ = g(χᵢ⁺, θᵢ) and θ̂ the estimate before this update. A masked update reduces T to the columns
 /// present, each row rescaled to sum to 1 again (eq. 14); a row with no weight on any present
-/// component leaves its parameter at θ̂.
+/// component leaves its parameter at θ̂. The settings `automaticTransformation` and `adaptiveScaling`
+/// set T and one ξ per parameter from the sensitivities instead, for p more propagations per time
+/// update (parameter_sensitivity.hpp, docs/tuning-mjukf.md).
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>>
 class ModifiedJointUkf
     : public detail::UnscentedEngine<ModifiedJointUkf<Model_, Integrator_>, Model_, Integrator_,
@@ -120,7 +122,8 @@ class ModifiedJointUkf
   /// θ); not followed, and zero, when neither mode is on.
   const Sensitivity& sensitivity() const { return sensitivity_; }
 
-  /// Starts again from (state, covariance), keeping θ̂ and the θᵢ. Throws std::invalid_argument naming
+  /// Starts again from (state, covariance), keeping θ̂ and the θᵢ (and, in the automatic modes, the
+  /// information about θ; the new state does not depend on θ̂, W = 0). Throws std::invalid_argument naming
   /// the argument, and changes nothing, when one is not finite or the covariance is not symmetric
   /// positive definite.
   void reset(const State& state, const StateMatrix& covariance) {
@@ -129,8 +132,8 @@ class ModifiedJointUkf
     this->resetEstimate(state, covariance);
     sensitivity_.restartState();
   }
-  /// Starts again from (state, covariance) and θ̂ = `parameters`, the θᵢ spread around it by eq. 8 as
-  /// at construction. The parameters must also be finite and within the bounds.
+  /// Starts again from (state, covariance) and θ̂ = `parameters`, the θᵢ spread around it by eq. 8 and
+  /// the automatic modes' knowledge of θ back to its prior, as at construction. The parameters must also be finite and within the bounds.
   void reset(const State& state, const StateMatrix& covariance, const Param& parameters) {
     detail::requireFinite(kOwner, "state", state);
     detail::requireFinite(kOwner, "parameters", parameters);
