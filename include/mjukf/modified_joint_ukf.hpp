@@ -77,7 +77,9 @@ struct ModifiedJointUkfSettings
 ///
 /// with Yᵢ = g(χᵢ⁺, θᵢ) and θ̂ the estimate before this update. A masked update reduces T to the columns
 /// present, each row rescaled to sum to 1 again (eq. 14); a row with no weight on any present
-/// component leaves its parameter at θ̂.
+/// component leaves its parameter at θ̂. The settings `automaticTransformation` and `adaptiveScaling`
+/// set T and one ξ per parameter from the sensitivities instead, for p more propagations per time
+/// update (parameter_sensitivity.hpp, docs/tuning-mjukf.md).
 ///
 /// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
 /// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
@@ -158,7 +160,8 @@ class ModifiedJointUkf
   /// θ); not followed, and zero, when neither mode is on.
   const Sensitivity& sensitivity() const { return sensitivity_; }
 
-  /// Starts again from (state, covariance), keeping θ̂ and the θᵢ. When one is not finite or the
+  /// Starts again from (state, covariance), keeping θ̂ and the θᵢ (and, in the automatic modes, the
+  /// information about θ; the new state does not depend on θ̂, W = 0). When one is not finite or the
   /// covariance is not symmetric positive definite, it changes nothing and throws
   /// std::invalid_argument naming the argument (without exceptions: returns the SettingsError;
   /// ResetResult, settings_error.hpp).
@@ -169,8 +172,9 @@ class ModifiedJointUkf
     sensitivity_.restartState();
     return ResetResult();
   }
-  /// Starts again from (state, covariance) and θ̂ = `parameters`, the θᵢ spread around it by eq. 8 as
-  /// at construction. The parameters must also be finite and within the bounds.
+  /// Starts again from (state, covariance) and θ̂ = `parameters`, the θᵢ spread around it by eq. 8 and
+  /// the automatic modes' knowledge of θ back to its prior, as at construction. The parameters must
+  /// also be finite and within the bounds.
   ResetResult reset(const State& state, const StateMatrix& covariance, const Param& parameters) {
     if (SettingsError e = detail::checkInitialValues(kOwner, state, parameters, this->settings_.parameterBounds,
                                                      "state", "parameters"))
@@ -286,7 +290,7 @@ class ModifiedJointUkf
     const Settings& s = this->settings_;
     const Scalar memory = s.adaptiveScaling ? s.convergenceTime : std::numeric_limits<Scalar>::infinity();
     const auto measure = [this](const State& x, const Param& theta) { return this->model_.measurement(x, theta); };
-    if (!sensitivity_.correct(state(), parameters_, measure, this->core_.candidateGainTransposed(),
+    if (!sensitivity_.correct(state(), parameters_, measure, this->core_.candidateWhitenedCrossCovariance(),
                               this->core_.candidateInnovationFactor(), memory, present))
       return Status::NonFiniteResult;
     if (s.automaticTransformation) {

@@ -113,10 +113,11 @@ class ParameterSensitivity {
   /// Measurement update about the prior (x̂⁻, θ̂), with g the model's measurement: ψ by forward
   /// differences of g along (W⁻ᵣ, eᵣ), zero on missing components; W ← W⁻ − K ψ; the information
   /// I ← λ I + ψᵀ P_yy⁻¹ ψ with the forgetting λ = exp(−Δt / memory), Δt the time since the last
-  /// correction. `innovationFactor` is the lower Cholesky factor S of P_yy. Returns false (candidates
+  /// correction. `innovationFactor` is the lower Cholesky factor S of P_yy and `whitenedCross` is
+  /// U = P_xy S⁻ᵀ, so that K ψ = U (S⁻¹ ψ) (detail/unscented_core.hpp). Returns false (candidates
   /// unspecified) when a result is not finite.
-  template <class Measure, class GainTransposed>
-  bool correct(const State& priorMean, const Param& theta, Measure&& measure, const GainTransposed& gainTransposed,
+  template <class Measure, class WhitenedCross>
+  bool correct(const State& priorMean, const Param& theta, Measure&& measure, const WhitenedCross& whitenedCross,
                const MeasMatrix& innovationFactor, Scalar memory, const MeasurementMask<M>* present) {
     candidateState_ = state_;
     if (stale_) {
@@ -131,13 +132,15 @@ class ParameterSensitivity {
         candidateMeasurement_.col(r) =
             (measure(State(priorMean + delta * state_.col(r)), perturbed) - nominal) / delta;
       }
-      candidateState_.noalias() -= gainTransposed.transpose() * candidateMeasurement_;
     }
+    // A missing component has a zero column in U and a unit row and column in S: its ψ does not reach
+    // W, so zeroing it first changes nothing there.
     if (present)
       for (int j = 0; j < M; ++j)
         if (!(*present)(j)) candidateMeasurement_.row(j).setZero();
     whitened_ = candidateMeasurement_;
-    solveLower(innovationFactor, whitened_);  // S⁻¹ ψ
+    solveLower(innovationFactor, whitened_);                             // S⁻¹ ψ
+    if (!stale_) candidateState_.noalias() -= whitenedCross * whitened_;  // W − K ψ = W − U S⁻¹ ψ
     if (sinceCorrection_ != forgettingInterval_ || memory != forgettingMemory_) {  // exp once per schedule
       forgettingInterval_ = sinceCorrection_;
       forgettingMemory_ = memory;

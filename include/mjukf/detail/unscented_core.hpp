@@ -167,9 +167,10 @@ class UnscentedCore {
   /// The factor of candidateCovariance() after settle() accepted it.
   const Matrix& candidateFactor() const { return guard_.factor(); }
   const SigmaPoints& sigmaPoints() const { return sigmaPoints_; }
-  /// After correct() returned Ok: Kᵀ and the lower Cholesky factor of P_yy (the MJUKF's automatic
-  /// modes read them to follow the sensitivity of the estimate to the parameters).
-  const Eigen::Matrix<Scalar, M, L>& candidateGainTransposed() const { return gainTransposed_; }
+  /// After correct() returned Ok: U = P_xy S⁻ᵀ and the lower Cholesky factor S of P_yy, so that the
+  /// gain is K = U S⁻¹ (the MJUKF's automatic modes read them to follow the sensitivity of the
+  /// estimate to the parameters).
+  const Eigen::Matrix<Scalar, L, M>& candidateWhitenedCrossCovariance() const { return crossCovariance_; }
   const MeasMatrix& candidateInnovationFactor() const { return innovationFactor_; }
 
  private:
