@@ -102,8 +102,8 @@ class CovarianceGuard {
   const Matrix& factor() const { return factor_; }
 
  private:
-  Matrix factor_;
-  Matrix candidate_;
+  Matrix factor_ = Matrix::Zero();
+  Matrix candidate_ = Matrix::Zero();
 };
 
 }  // namespace detail

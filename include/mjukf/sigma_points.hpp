@@ -132,7 +132,7 @@ class MerweScaledSigmaPoints {
   Scalar gamma_;
   Weights meanWeights_;
   Weights covarianceWeights_;
-  Matrix factor_;  // workspace of generate()
+  Matrix factor_ = Matrix::Zero();  // workspace of generate()
 };
 
 }  // namespace mjukf

@@ -215,15 +215,16 @@ class UnscentedCore {
   Points points_ = Points::Zero();  // χᵢ⁺ of the last time update, used by the measurement update
   bool hasPoints_ = false;
   Diagnostics diagnostics_;
-  // Workspace: a step computes here and commits only when the whole step succeeded.
-  Points workPoints_;                  // drawn, then propagated in place
-  MeasPoints measuredPoints_;          // Yᵢ = g(χᵢ⁺)
-  Points deviations_;                  // χᵢ⁺ − x̂⁻
-  MeasPoints measurementDeviations_;   // Yᵢ − ŷ
-  Eigen::Matrix<Scalar, L, M> crossCovariance_;  // P_xy, then U = P_xy S⁻ᵀ
-  MeasMatrix innovationFactor_;        // S with P_yy = S Sᵀ
-  Vector candidateMean_;
-  Matrix candidateCovariance_;
+  // Workspace: a step computes here and commits only when the whole step succeeded. Zeroed once at
+  // construction, so that copying a filter before its first step copies no indeterminate values.
+  Points workPoints_ = Points::Zero();                // drawn, then propagated in place
+  MeasPoints measuredPoints_ = MeasPoints::Zero();    // Yᵢ = g(χᵢ⁺)
+  Points deviations_ = Points::Zero();                // χᵢ⁺ − x̂⁻
+  MeasPoints measurementDeviations_ = MeasPoints::Zero();  // Yᵢ − ŷ
+  Eigen::Matrix<Scalar, L, M> crossCovariance_ = Eigen::Matrix<Scalar, L, M>::Zero();  // P_xy, then U = P_xy S⁻ᵀ
+  MeasMatrix innovationFactor_ = MeasMatrix::Zero();  // S with P_yy = S Sᵀ
+  Vector candidateMean_ = Vector::Zero();
+  Matrix candidateCovariance_ = Matrix::Zero();
   Diagnostics candidateDiagnostics_;
   CovarianceGuard<Scalar, L> guard_;
 };
