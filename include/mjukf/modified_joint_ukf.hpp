@@ -107,6 +107,7 @@ class ModifiedJointUkf
   using Transformation = Eigen::Matrix<Scalar, ParamDim, MeasDim>;
   /// The per-point parameter vectors θᵢ, one column per sigma point.
   using ParamPoints = Eigen::Matrix<Scalar, ParamDim, SigmaPointCount>;
+  /// What the automatic modes follow about θ (parameter_sensitivity.hpp): W, ψ and the information.
   using Sensitivity = ParameterSensitivity<Scalar, StateDim, MeasDim, ParamDim>;
 
 #if MJUKF_EXCEPTIONS

@@ -26,13 +26,21 @@ namespace mjukf {
 template <class Scalar, int N, int M, int P>
 class ParameterSensitivity {
  public:
+  /// A state vector x (n).
   using State = Eigen::Matrix<Scalar, N, 1>;
+  /// A measurement vector y (m).
   using Meas = Eigen::Matrix<Scalar, M, 1>;
+  /// A parameter vector θ (p).
   using Param = Eigen::Matrix<Scalar, P, 1>;
+  /// W = ∂x̂/∂θ̂ (n × p), one column per parameter.
   using StateSensitivity = Eigen::Matrix<Scalar, N, P>;
+  /// ψ = ∂ŷ/∂θ̂ (m × p), one column per parameter.
   using MeasSensitivity = Eigen::Matrix<Scalar, M, P>;
+  /// I (p × p): the information gathered about θ, in units of 1/θ².
   using Information = Eigen::Matrix<Scalar, P, P>;
+  /// T of eq. 9 (p × m).
   using Transformation = Eigen::Matrix<Scalar, P, M>;
+  /// An m × m matrix: R, or the Cholesky factor S of P_yy.
   using MeasMatrix = Eigen::Matrix<Scalar, M, M>;
 
   /// Starts from an estimate that does not depend on θ (W = 0) and the prior information
@@ -99,12 +107,16 @@ class ParameterSensitivity {
     candidateInterval_ = interval;
     candidateStale_ = true;
   }
+  /// Accepts the last `predict` or `keepPrediction`: W ← W⁻, and its interval counts as time since
+  /// the last correction (and, after `keepPrediction`, as open-loop time).
   void commitPrediction() {
     state_ = candidateState_;
     sinceCorrection_ += candidateInterval_;
     openLoopTime_ = candidateStale_ ? openLoopTime_ + candidateInterval_ : Scalar(0);
     stale_ = candidateStale_;
   }
+  /// Counts an open-loop propagation over `interval` (W unchanged) towards the next refresh's
+  /// extrapolation and the time since the last correction.
   void commitOpenLoop(Scalar interval) {
     openLoopTime_ += interval;
     sinceCorrection_ += interval;
@@ -151,6 +163,8 @@ class ParameterSensitivity {
     return detail::allFinite(candidateMeasurement_) && detail::allFinite(candidateState_) &&
            detail::allFinite(candidateInformation_);
   }
+  /// Accepts the last `correct`: W, ψ (unless reused) and I become the candidates'; the time since
+  /// the last correction restarts at zero.
   void commitCorrection() {
     state_ = candidateState_;
     if (!stale_) measurement_ = candidateMeasurement_;
@@ -191,9 +205,11 @@ class ParameterSensitivity {
     }
   }
 
+  /// W = ∂x̂/∂θ̂ of the last committed update.
   const StateSensitivity& stateSensitivity() const { return state_; }
   /// ψ = ∂ŷ/∂θ̂ of the last measurement update.
   const MeasSensitivity& measurementSensitivity() const { return measurement_; }
+  /// I, the information about θ after the last measurement update (the prior diag(1 / scaleᵣ²) before one).
   const Information& information() const { return information_; }
 
  private:

@@ -16,9 +16,11 @@
 
 namespace mjukf {
 
+/// \cond INTERNAL
 namespace detail {
 struct BuildWith {};  // tag of Result's constructor from a callable returning T
 }  // namespace detail
+/// \endcond
 
 /// Holds a T, built in place, or the SettingsError that stopped its construction; never both, never a
 /// half-built T. `create()` returns it by value with guaranteed copy elision (C++17): the T is built
@@ -35,9 +37,11 @@ class Result {
   Result(detail::BuildWith, Make&& make) {
     ::new (static_cast<void*>(&value_)) T(make());
   }
+  /// Copies the T, or the error.
   Result(const Result& other) : error_(other.error_) {
     if (!error_) ::new (static_cast<void*>(&value_)) T(other.value_);
   }
+  /// Moves the T out of `other` (left holding a moved-from T), or copies the error.
   Result(Result&& other) noexcept(std::is_nothrow_move_constructible_v<T>) : error_(other.error_) {
     if (!error_) ::new (static_cast<void*>(&value_)) T(std::move(other.value_));
   }
@@ -49,6 +53,7 @@ class Result {
 
   /// True when the T was built.
   bool ok() const noexcept { return !error_; }
+  /// ok(): true when the T was built.
   explicit operator bool() const noexcept { return ok(); }
   /// The error; "no error" (false) when ok().
   const SettingsError& error() const noexcept { return error_; }
@@ -57,10 +62,15 @@ class Result {
   /// exceptions are on, otherwise traps (__builtin_trap): a filter that failed validation is never
   /// usable.
   T& value() & { return ok() ? value_ : fail(); }
+  /// The T, read-only; as value().
   const T& value() const& { return ok() ? value_ : fail(); }
+  /// value().
   T& operator*() & { return value(); }
+  /// value(), read-only.
   const T& operator*() const& { return value(); }
+  /// &value().
   T* operator->() { return &value(); }
+  /// &value(), read-only.
   const T* operator->() const { return &value(); }
 
  private:
@@ -78,6 +88,7 @@ class Result {
   };
 };
 
+/// \cond INTERNAL
 namespace detail {
 
 // What a create() returns: `error`, or the T that `make()` returns, built in place. `make` is a lambda
@@ -89,4 +100,5 @@ Result<T> resultOf(const SettingsError& error, Make&& make) {
 }
 
 }  // namespace detail
+/// \endcond
 }  // namespace mjukf

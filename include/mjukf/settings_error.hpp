@@ -21,10 +21,14 @@ namespace mjukf {
 /// default-constructed value is "no error". With exceptions on, the message of the std::invalid_argument
 /// the library throws is "<owner>: setting '<setting>' <reason>".
 struct [[nodiscard]] SettingsError {
+  /// The class that checked the setting, e.g. "mjukf::Ukf"; null when there is no error.
   const char* owner = nullptr;
+  /// The setting or argument, e.g. "measurementNoise (R)"; null when there is no error.
   const char* setting = nullptr;
+  /// What is wrong with it, e.g. "must be symmetric"; null when there is no error.
   const char* reason = nullptr;
 
+  /// True when there is an error (a setting is named).
   constexpr explicit operator bool() const noexcept { return setting != nullptr; }
 };
 

@@ -47,6 +47,7 @@ class ExplicitTrBdf2 {
   static Result<ExplicitTrBdf2> create(Scalar gamma) {
     return detail::resultOf<ExplicitTrBdf2>(validate(gamma), [&] { return ExplicitTrBdf2(detail::Validated{}, gamma); });
   }
+  /// The SettingsError naming `gamma` when it is not in (0, 1), or none: what the constructor would throw.
   static SettingsError validate(Scalar gamma) { return detail::validateStageFraction("mjukf::ExplicitTrBdf2", gamma); }
 
   /// One step of size h from x at time t of ẋ = f(t, x); f is called as `f(Scalar t, const State& x)`.

@@ -39,6 +39,7 @@ class ITrBdf2 {
   static Result<ITrBdf2> create(Scalar gamma) {
     return detail::resultOf<ITrBdf2>(validate(gamma), [&] { return ITrBdf2(detail::Validated{}, gamma); });
   }
+  /// The SettingsError naming `gamma` when it is not in (0, 1), or none: what the constructor would throw.
   static SettingsError validate(Scalar gamma) { return detail::validateStageFraction("mjukf::ITrBdf2", gamma); }
 
   /// One step of size h from x at time t of ẋ = f(t, x); f is called as `f(Scalar t, const State& x)`.

@@ -7,6 +7,7 @@
 #include "mjukf/detail/validation.hpp"
 #include "mjukf/settings_error.hpp"
 
+/// \cond INTERNAL
 namespace mjukf::detail {
 
 // γ, the fraction of the step taken by the trapezoidal stage, in (0, 1).
@@ -33,3 +34,4 @@ struct Bdf2Weights {
 };
 
 }  // namespace mjukf::detail
+/// \endcond

@@ -23,9 +23,25 @@ namespace mjukf::paper {
 /// `r`), JUKF's and the dual's parameter P₀ and Q (`parameterP0`, `parameterQ`).
 template <class Model>
 struct Settings2019 {
+  /// The model's floating-point type.
   using Scalar = typename Model::Scalar;
+  /// \var stateP0
+  /// The state's initial covariance P₀ = stateP0 · I.
+  //
+  /// \var stateQ
+  /// The state's process noise covariance Q = stateQ · I.
+  //
+  /// \var r
+  /// The measurement noise covariance R = r · I.
+  //
+  /// \var parameterP0
+  /// The parameters' initial covariance, JUKF's θ block of P₀ and the dual's, parameterP0 · I.
+  //
+  /// \var parameterQ
+  /// The parameters' process noise covariance, JUKF's θ block of Q and the dual's, parameterQ · I.
   Scalar stateP0, stateQ, r, parameterP0, parameterQ;
 
+  /// The state-only UKF's settings: P₀, Q and R.
   UkfSettings<Model> ukf() const {
     UkfSettings<Model> s;
     s.initialCovariance.diagonal().setConstant(stateP0);
@@ -34,6 +50,7 @@ struct Settings2019 {
     return s;
   }
 
+  /// JUKF's settings: P₀ and Q with the state's block then the parameters' block, and R.
   JointUkfSettings<Model> jointUkf() const {
     JointUkfSettings<Model> s;
     s.initialCovariance.diagonal() << Eigen::Matrix<Scalar, Model::StateDim, 1>::Constant(stateP0),
@@ -69,18 +86,28 @@ struct Settings2019 {
 /// dual settings made from `Experiment::common()`.
 template <class Experiment, class Model_>
 struct Experiment2019 {
+  /// The system.
   using Model = Model_;
+  /// Its floating-point type.
   using Scalar = typename Model::Scalar;
+  /// RK4, for the simulation and the filters alike.
   using Integrator = Rk4<Scalar>;
+  /// Its state vector.
   using State = typename Model::State;
+  /// Its parameter vector.
   using Param = typename Model::Param;
+  /// The length of a run (s).
   static constexpr Scalar duration = Scalar(100);
+  /// N: one measurement update every N integration steps (every step).
   static constexpr int measurementEvery = 1;
   /// y = x + e, std(eᵢ) = 0.1 |xᵢ|.
   static constexpr Scalar relativeNoise = Scalar(0.1);
 
+  /// The state-only filter, given the true parameters: P₀, Q and R of `Experiment::common()`.
   static UkfSettings<Model> ukf() { return Experiment::common().ukf(); }
+  /// JUKF's settings, from `Experiment::common()`.
   static JointUkfSettings<Model> jointUkf() { return Experiment::common().jointUkf(); }
+  /// Not in the 2019 paper: the dual UKF's settings, from `Experiment::common()`.
   static DualUkfSettings<Model> dualUkf() { return Experiment::common().dualUkf(); }
 };
 
@@ -88,13 +115,20 @@ struct Experiment2019 {
 /// the filters start at x̂₀ = (0, 5), μ̂₀ = 5.
 template <class Scalar = double>
 struct VanDerPolExperiment : Experiment2019<VanDerPolExperiment<Scalar>, models::VanDerPol<Scalar>> {
+  /// What both 2019 experiments share.
   using Base = Experiment2019<VanDerPolExperiment<Scalar>, models::VanDerPol<Scalar>>;
+  /// The system, its state vector and its parameter vector.
   using typename Base::Model, typename Base::State, typename Base::Param;
+  /// h, the integration step (s).
   static constexpr Scalar stepSize = Scalar(0.1);
+  /// The first data row of the RMSE: the first tenth of the run is left out.
   static constexpr long rmseFromRow = 100;  // t ≥ 10 s
 
+  /// x₀ = (1.4, 0), the simulated system's initial state.
   static State trueInitialState() { return State(Scalar(1.4), Scalar(0)); }
+  /// x̂₀ = (0, 5), the filters' initial state.
   static State initialState() { return State(Scalar(0), Scalar(5)); }
+  /// θ̂₀ = (μ̂₀) = (5), the first guess.
   static Param initialParameters() { return Param::Constant(Scalar(5)); }
 
   /// P₀ = 5 I, Q = 1e-3 I, R = 0.1 I (2019). JUKF's μ block (this library's choice): P₀ = 5 as the
@@ -118,13 +152,20 @@ struct VanDerPolExperiment : Experiment2019<VanDerPolExperiment<Scalar>, models:
 /// measurement every step; the filters start at x̂₀ = (1.5, 1.5, 1.5), θ̂₀ = (5, 21, 1/3).
 template <class Scalar = double>
 struct LorenzExperiment : Experiment2019<LorenzExperiment<Scalar>, models::Lorenz<Scalar>> {
+  /// What both 2019 experiments share.
   using Base = Experiment2019<LorenzExperiment<Scalar>, models::Lorenz<Scalar>>;
+  /// The system, its state vector and its parameter vector.
   using typename Base::Model, typename Base::State, typename Base::Param;
+  /// h, the integration step (s).
   static constexpr Scalar stepSize = Scalar(0.01);
+  /// The first data row of the RMSE: the first tenth of the run is left out.
   static constexpr long rmseFromRow = 1000;  // t ≥ 10 s
 
+  /// x₀ = (0.9, 1, 1.1), the simulated system's initial state.
   static State trueInitialState() { return State(Scalar(0.9), Scalar(1), Scalar(1.1)); }
+  /// x̂₀ = (1.5, 1.5, 1.5), the filters' initial state.
   static State initialState() { return State::Constant(Scalar(1.5)); }
+  /// θ̂₀ = (σ̂₀, ρ̂₀, β̂₀) = (5, 21, 1/3), the first guess.
   static Param initialParameters() { return Param(Scalar(5), Scalar(21), Scalar(1) / Scalar(3)); }
 
   /// P₀ = Q = 1e-3 I, R = 0.2 I (2019). JUKF's θ block (this library's choice): P₀ = 10 I (a prior
