@@ -271,6 +271,8 @@ def main():
         for f in FILTERS:
             name = f"run/{p}/{f}"
             t = get(plain, name)
+            if t is None:
+                continue  # no whole-run benchmark of this filter
             b = plain["benchmarks"].get(name, {})
             ref = REFERENCE_S.get((p, f))
             rmse = ", ".join(f"{b[k]:.10g}" for k in ("rmse_theta1", "rmse_theta2") if k in b) if f != "ukf" else "–"
