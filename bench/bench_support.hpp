@@ -17,6 +17,7 @@
 #include "mjukf/paper/experiments.hpp"
 #include "mjukf/simulation.hpp"
 #include "mjukf/ukf.hpp"
+#include "test_support.hpp"  // rebindSettings: a preset moved to a model of the same sizes (tests/)
 
 namespace mjukf::bench {
 
@@ -59,59 +60,6 @@ struct Counting : Base {
   }
 };
 
-// The paper's settings, moved to another model type with the same dimensions.
-template <class To, class From>
-UkfSettings<To> rebind(const UkfSettings<From>& s) {
-  UkfSettings<To> r;
-  r.sigmaPoints = s.sigmaPoints;
-  r.initialCovariance = s.initialCovariance;
-  r.processNoise = s.processNoise;
-  r.measurementNoise = s.measurementNoise;
-  r.redrawPointsForUpdate = s.redrawPointsForUpdate;
-  return r;
-}
-template <class To, class From>
-JointUkfSettings<To> rebind(const JointUkfSettings<From>& s) {
-  JointUkfSettings<To> r;
-  r.sigmaPoints = s.sigmaPoints;
-  r.initialCovariance = s.initialCovariance;
-  r.processNoise = s.processNoise;
-  r.measurementNoise = s.measurementNoise;
-  r.redrawPointsForUpdate = s.redrawPointsForUpdate;
-  return r;
-}
-template <class To, class From>
-ModifiedJointUkfSettings<To> rebind(const ModifiedJointUkfSettings<From>& s) {
-  ModifiedJointUkfSettings<To> r;
-  r.sigmaPoints = s.sigmaPoints;
-  r.initialCovariance = s.initialCovariance;
-  r.processNoise = s.processNoise;
-  r.measurementNoise = s.measurementNoise;
-  r.redrawPointsForUpdate = s.redrawPointsForUpdate;
-  r.scaling = s.scaling;
-  r.transformation = s.transformation;
-  r.parameterSpread = s.parameterSpread;
-  r.automaticTransformation = s.automaticTransformation;
-  r.adaptiveScaling = s.adaptiveScaling;
-  r.convergenceTime = s.convergenceTime;
-  r.sensitivityInterval = s.sensitivityInterval;
-  return r;
-}
-
-template <class To, class From>
-DualUkfSettings<To> rebind(const DualUkfSettings<From>& s) {
-  using Shared = ParameterEstimationSettings<typename From::Scalar, From::StateDim, From::MeasDim, From::ParamDim>;
-  DualUkfSettings<To> r;
-  static_cast<Shared&>(r) = static_cast<const Shared&>(s);
-  r.parameterSigmaPoints = s.parameterSigmaPoints;
-  r.initialParameterCovariance = s.initialParameterCovariance;
-  r.parameterProcessNoise = s.parameterProcessNoise;
-  r.parameterObservationNoise = s.parameterObservationNoise;
-  r.parameterForgetting = s.parameterForgetting;
-  r.ordering = s.ordering;
-  return r;
-}
-
 /// ukf, jukf, mjukf: the paper's settings; mjukf_auto: MJUKF with both automatic modes (T from the
 /// sensitivities, adaptive ξ; docs/tuning-mjukf.md) and the paper's other settings; dual: the dual UKF
 /// with the library's settings (Experiment::dualUkf(), PriorParameters ordering; the paper runs none).
@@ -142,21 +90,22 @@ FilterType<Kind, Model> makeFilter(const Model& model = Model()) {
   const auto x0 = Experiment::initialState();
   if constexpr (Kind == FilterKind::Ukf)
     return FilterType<Kind, Model>(model, x0, Experiment::Model::trueParameters(),
-                                   rebind<Model>(Experiment::ukf()));
+                                   testing::rebindSettings<Model>(Experiment::ukf()));
   else if constexpr (Kind == FilterKind::Jukf)
     return FilterType<Kind, Model>(model, x0, Experiment::initialParameters(),
-                                   rebind<Model>(Experiment::jointUkf()));
+                                   testing::rebindSettings<Model>(Experiment::jointUkf()));
   else if constexpr (Kind == FilterKind::Mjukf)
     return FilterType<Kind, Model>(model, x0, Experiment::initialParameters(),
-                                   rebind<Model>(Experiment::modifiedJointUkf()));
+                                   testing::rebindSettings<Model>(Experiment::modifiedJointUkf()));
   else if constexpr (Kind == FilterKind::MjukfAuto) {
-    auto settings = rebind<Model>(Experiment::modifiedJointUkf());
+    auto settings = testing::rebindSettings<Model>(Experiment::modifiedJointUkf());
     settings.automaticTransformation = true;
     settings.adaptiveScaling = true;
     return FilterType<Kind, Model>(model, x0, Experiment::initialParameters(), settings);
   }
   else
-    return FilterType<Kind, Model>(model, x0, Experiment::initialParameters(), rebind<Model>(Experiment::dualUkf()));
+    return FilterType<Kind, Model>(model, x0, Experiment::initialParameters(),
+                                   testing::rebindSettings<Model>(Experiment::dualUkf()));
 }
 
 /// Measurements y_k = x(k h) + v_k of the plant with its true parameters, simulated with I-TR-BDF2
