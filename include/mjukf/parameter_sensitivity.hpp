@@ -151,7 +151,7 @@ class ParameterSensitivity {
       for (int j = 0; j < M; ++j)
         if (!(*present)(j)) candidateMeasurement_.row(j).setZero();
     whitened_ = candidateMeasurement_;
-    solveLower(innovationFactor, whitened_);                             // S⁻¹ ψ
+    detail::solveLowerInPlace(innovationFactor, whitened_);  // S⁻¹ ψ
     if (!stale_) candidateState_.noalias() -= whitenedCross * whitened_;  // W − K ψ = W − U S⁻¹ ψ
     if (sinceCorrection_ != forgettingInterval_ || memory != forgettingMemory_) {  // exp once per schedule
       forgettingInterval_ = sinceCorrection_;
@@ -190,15 +190,15 @@ class ParameterSensitivity {
   /// with T moves θᵣ as G would, as far as T's row allows. ξᵣ = 0 for a zero row of T.
   void scaling(const Transformation& t, const MeasMatrix& innovationFactor, Param& xi) {
     MeasSensitivity solved = whitened_;
-    solveUpper(innovationFactor, solved);  // P_yy⁻¹ ψ = S⁻ᵀ (S⁻¹ ψ)
+    detail::solveUpperInPlace(innovationFactor, solved);  // P_yy⁻¹ ψ = S⁻ᵀ (S⁻¹ ψ)
     gain_ = solved.transpose();
     Information informationFactor;
     if (!detail::choleskyLower(candidateInformation_, informationFactor)) {
       xi.setZero();
       return;
     }
-    solveLower(informationFactor, gain_);
-    solveUpper(informationFactor, gain_);
+    detail::solveLowerInPlace(informationFactor, gain_);
+    detail::solveUpperInPlace(informationFactor, gain_);
     for (int r = 0; r < P; ++r) {
       const Scalar norm = t.row(r).squaredNorm();
       xi(r) = norm > Scalar(0) ? -gain_.row(r).dot(t.row(r)) / norm : Scalar(0);
@@ -213,24 +213,6 @@ class ParameterSensitivity {
   const Information& information() const { return information_; }
 
  private:
-  // B ← L⁻¹ B and B ← L⁻ᵀ B for a lower-triangular L, by substitution a row at a time: Eigen's
-  // triangular solve with a matrix right-hand side takes its general blocked path, which costs more
-  // than the rest of this class's arithmetic at these sizes (as in detail/unscented_core.hpp).
-  template <class Lower, class Rhs>
-  static void solveLower(const Lower& l, Rhs& b) {
-    for (int i = 0; i < l.rows(); ++i) {
-      for (int k = 0; k < i; ++k) b.row(i) -= l(i, k) * b.row(k);
-      b.row(i) /= l(i, i);
-    }
-  }
-  template <class Lower, class Rhs>
-  static void solveUpper(const Lower& l, Rhs& b) {
-    for (int i = int(l.rows()) - 1; i >= 0; --i) {
-      for (int k = i + 1; k < l.rows(); ++k) b.row(i) -= l(k, i) * b.row(k);
-      b.row(i) /= l(i, i);
-    }
-  }
-
   Param scale_ = Param::Ones();
   StateSensitivity state_ = StateSensitivity::Zero();         // W
   MeasSensitivity measurement_ = MeasSensitivity::Zero();     // ψ

@@ -74,4 +74,23 @@ bool choleskyLower(const Eigen::Matrix<Scalar, N, N>& a, Eigen::Matrix<Scalar, N
   return true;
 }
 
+// B ← S⁻¹ B and B ← S⁻ᵀ B for a lower-triangular S (a factor from choleskyLower), by substitution a
+// row at a time; B is a vector or a matrix. Written out because Eigen's triangular solve with a matrix
+// right-hand side takes its general blocked path (packing, level-3 kernels), which at these sizes costs
+// more than the arithmetic around it.
+template <class Lower, class Rhs>
+void solveLowerInPlace(const Lower& s, Rhs& b) {
+  for (int i = 0; i < int(s.rows()); ++i) {
+    for (int k = 0; k < i; ++k) b.row(i) -= s(i, k) * b.row(k);
+    b.row(i) /= s(i, i);
+  }
+}
+template <class Lower, class Rhs>
+void solveUpperInPlace(const Lower& s, Rhs& b) {
+  for (int i = int(s.rows()) - 1; i >= 0; --i) {
+    for (int k = i + 1; k < int(s.rows()); ++k) b.row(i) -= s(k, i) * b.row(k);
+    b.row(i) /= s(i, i);
+  }
+}
+
 }  // namespace mjukf::detail

@@ -120,7 +120,7 @@ class UnscentedCore {
     //   K P_yy Kᵀ = U Uᵀ:
     // one triangular solve for U instead of two for K, and a P that is symmetric as computed.
     MeasVector whitened = d.innovation;
-    solveLowerInPlace(whitened);
+    solveLowerInPlace(innovationFactor_, whitened);
     d.nis = whitened.squaredNorm();
     // An innovation or NIS that overflowed (a model returning huge values) is no measurement to use,
     // even when the gain is zero.
@@ -188,14 +188,6 @@ class UnscentedCore {
     out.noalias() = (a * sigmaPoints_.covarianceWeights().asDiagonal()).lazyProduct(b.transpose());
   }
 
-  // w ← S⁻¹ w with the lower Cholesky factor S of P_yy, by forward substitution.
-  void solveLowerInPlace(MeasVector& w) const {
-    const MeasMatrix& s = innovationFactor_;
-    for (int i = 0; i < M; ++i) {
-      for (int k = 0; k < i; ++k) w(i) -= s(i, k) * w(k);
-      w(i) /= s(i, i);
-    }
-  }
   // P_xy ← U = P_xy S⁻ᵀ, i.e. U Sᵀ = P_xy solved a column at a time (columns of U are contiguous).
   // Written out because Eigen's triangular solve with a matrix right-hand side takes its general
   // blocked path (packing, level-3 kernels), which costs more than all the rest of the update here.
