@@ -17,7 +17,6 @@
 #include "mjukf/paper/experiments.hpp"
 #include "mjukf/simulation.hpp"
 #include "mjukf/ukf.hpp"
-#include "test_support.hpp"  // rebindSettings: a preset moved to a model of the same sizes (tests/)
 
 namespace mjukf::bench {
 
@@ -90,22 +89,22 @@ FilterType<Kind, Model> makeFilter(const Model& model = Model()) {
   const auto x0 = Experiment::initialState();
   if constexpr (Kind == FilterKind::Ukf)
     return FilterType<Kind, Model>(model, x0, Experiment::Model::trueParameters(),
-                                   testing::rebindSettings<Model>(Experiment::ukf()));
+                                   Experiment::ukf());
   else if constexpr (Kind == FilterKind::Jukf)
     return FilterType<Kind, Model>(model, x0, Experiment::initialParameters(),
-                                   testing::rebindSettings<Model>(Experiment::jointUkf()));
+                                   Experiment::jointUkf());
   else if constexpr (Kind == FilterKind::Mjukf)
     return FilterType<Kind, Model>(model, x0, Experiment::initialParameters(),
-                                   testing::rebindSettings<Model>(Experiment::modifiedJointUkf()));
+                                   Experiment::modifiedJointUkf());
   else if constexpr (Kind == FilterKind::MjukfAuto) {
-    auto settings = testing::rebindSettings<Model>(Experiment::modifiedJointUkf());
+    auto settings = Experiment::modifiedJointUkf();
     settings.automaticTransformation = true;
     settings.adaptiveScaling = true;
     return FilterType<Kind, Model>(model, x0, Experiment::initialParameters(), settings);
   }
   else
     return FilterType<Kind, Model>(model, x0, Experiment::initialParameters(),
-                                   testing::rebindSettings<Model>(Experiment::dualUkf()));
+                                   Experiment::dualUkf());
 }
 
 /// Measurements y_k = x(k h) + v_k of the plant with its true parameters, simulated with I-TR-BDF2

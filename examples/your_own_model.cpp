@@ -47,7 +47,7 @@ int run(double parameterProcessNoise, unsigned seed) {
                     y[k / 20] = x(0) + noise(rng);
                   });
 
-  mjukf::JointUkfSettings<VanDerPol> settings;  // P₀ and Q cover [x; μ]
+  mjukf::JointUkfSettingsFor<VanDerPol> settings;  // P₀ and Q cover [x; μ]
   settings.initialCovariance.diagonal() << 0.1, 0.1, 1.0;
   settings.processNoise.diagonal() << 1e-4, 1e-4, parameterProcessNoise;
   settings.measurementNoise << sigma * sigma;

@@ -280,7 +280,7 @@ TEST(DiscreteModel, StepsApplyTheTransitionAtEachStepWithItsInput) {
   model.calls = &calls;
   const auto signal = [](double time) { return 10 * time + 1; };
   const auto held = [](double) { return -0.5; };
-  mjukf::UkfSettings<RecordingModel> us;
+  mjukf::UkfSettingsFor<RecordingModel> us;
   us.initialCovariance << 1.0;
   us.processNoise << 1e-3;
   us.measurementNoise << 0.1;
@@ -303,7 +303,7 @@ TEST(DiscreteModel, StepsApplyTheTransitionAtEachStepWithItsInput) {
   // The dual filter in the UpdatedParameters ordering: its time update propagates the 3 state points
   // and x̂ for each of its 3 parameter points; its measurement update repeats the state's 3 with the
   // same times and inputs, the held one included.
-  mjukf::DualUkfSettings<RecordingModel> ds;
+  mjukf::DualUkfSettingsFor<RecordingModel> ds;
   static_cast<mjukf::UnscentedSettings<double, 1, 1>&>(ds) = us;
   ds.initialParameterCovariance << 0.01;
   ds.ordering = DualUkfOrdering::UpdatedParameters;

@@ -51,8 +51,8 @@ using Euler = mjukf::testing::Euler<double>;
 
 // The shared (state filter) settings of a dual filter, as the settings of a Ukf.
 template <class Model>
-mjukf::UkfSettings<Model> stateSettings(const mjukf::DualUkfSettings<Model>& dual) {
-  mjukf::UkfSettings<Model> s;
+mjukf::UkfSettingsFor<Model> stateSettings(const mjukf::DualUkfSettingsFor<Model>& dual) {
+  mjukf::UkfSettingsFor<Model> s;
   static_cast<mjukf::UnscentedSettings<typename Model::Scalar, Model::StateDim, Model::MeasDim>&>(s) = dual;
   return s;
 }
@@ -173,7 +173,7 @@ class Simulation {
 // time updates over one and several steps, held inputs, open-loop propagation and redrawn points.
 TEST(DualUkf, IndependentOfThetaItIsTheUkfBitForBit) {
   using Model = ThetaFreeOscillator;
-  mjukf::DualUkfSettings<Model> dualSettings;
+  mjukf::DualUkfSettingsFor<Model> dualSettings;
   dualSettings.initialCovariance = Eigen::Vector2d(0.5, 0.3).asDiagonal();
   dualSettings.initialCovariance(0, 1) = dualSettings.initialCovariance(1, 0) = 0.1;
   dualSettings.processNoise = 1e-4 * Eigen::Matrix2d::Identity();
@@ -238,7 +238,7 @@ TEST(DualUkf, IndependentOfThetaItIsTheUkfBitForBit) {
 TEST(DualUkf, WithAKnownParameterItIsTheUkfGivenTheTruth) {
   using Model = Spring<2>;
   const Model::Param theta = Model::trueParameters();
-  mjukf::DualUkfSettings<Model> s;
+  mjukf::DualUkfSettingsFor<Model> s;
   s.initialCovariance = Eigen::Vector2d(0.2, 0.2).asDiagonal();
   s.processNoise = 1e-5 * Eigen::Matrix2d::Identity();
   s.measurementNoise << 0.05 * 0.05;
@@ -307,7 +307,7 @@ double optimalParameterSigma(double h, double sigma, double p0, double ptheta0, 
 TEST(DualUkf, LinearGaussianLevelConvergesToTheTruth) {
   const double h = 0.02, sigma = 0.05, thetaTrue = 1.5;
   const int steps = 10000;
-  mjukf::DualUkfSettings<Level> s;
+  mjukf::DualUkfSettingsFor<Level> s;
   s.initialCovariance << 0.25;
   s.processNoise << 1e-8;
   s.measurementNoise << sigma * sigma;
@@ -359,7 +359,7 @@ TEST(DualUkf, PropagationCountsOfBothOrderings) {
     long evaluations = 0;
     Model model;
     model.evaluations = &evaluations;
-    mjukf::DualUkfSettings<Model> s;
+    mjukf::DualUkfSettingsFor<Model> s;
     s.initialCovariance = 0.1 * Eigen::Matrix2d::Identity();
     s.processNoise = 1e-5 * Eigen::Matrix2d::Identity();
     s.measurementNoise << 1e-2;
@@ -394,7 +394,7 @@ TEST(DualUkf, PropagationCountsOfBothOrderings) {
 // filter's time update P^θ⁻ = P^θ/λ + Q_θ, its points θⱼ of (θ̂, P^θ⁻), x̂_{k−1} propagated with each,
 // Dⱼ = g(·, θⱼ), and the unscented correction with R + parameterObservationNoise, by explicit inverse.
 template <class Model, class Stepper, class InputAt>
-void parameterStep(const Model& model, const mjukf::DualUkfSettings<Model>& s, const typename Model::State& x,
+void parameterStep(const Model& model, const mjukf::DualUkfSettingsFor<Model>& s, const typename Model::State& x,
                    const typename Model::Param& theta, Eigen::Matrix<double, Model::ParamDim, Model::ParamDim>& P,
                    typename Model::Param& thetaOut, InputAt&& inputAt, double t, double h, int steps,
                    const typename Model::Meas& y) {
@@ -440,7 +440,7 @@ void parameterStep(const Model& model, const mjukf::DualUkfSettings<Model>& s, c
 TEST(DualUkf, EachStepIsTheTextbookDualStepInBothOrderings) {
   using Model = Spring<2>;
   const Model model;
-  mjukf::DualUkfSettings<Model> base;
+  mjukf::DualUkfSettingsFor<Model> base;
   base.initialCovariance << 0.2, 0.05, 0.05, 0.3;
   base.processNoise = 1e-4 * Eigen::Matrix2d::Identity();
   base.measurementNoise << 0.01;
@@ -501,7 +501,7 @@ TEST(DualUkf, EachStepIsTheTextbookDualStepInBothOrderings) {
 // a tenth of that.
 TEST(DualUkf, OrderingsDifferWhereThetaDrivesTheDynamics) {
   using Model = Spring<2>;
-  mjukf::DualUkfSettings<Model> s;
+  mjukf::DualUkfSettingsFor<Model> s;
   s.initialCovariance = 0.2 * Eigen::Matrix2d::Identity();
   s.processNoise = 1e-4 * Eigen::Matrix2d::Identity();
   s.measurementNoise << 0.01;

@@ -391,8 +391,8 @@ struct UpperLevelTank : mjukf::models::CoupledTank<double> {
 TEST(DualUkfFailurePolicy, MaskedUpdateEqualsTheReducedModel) {
   using Full = mjukf::models::CoupledTank<double>;
   for (const auto ordering : {mjukf::DualUkfOrdering::PriorParameters, mjukf::DualUkfOrdering::UpdatedParameters}) {
-    mjukf::DualUkfSettings<Full> sf;
-    mjukf::DualUkfSettings<UpperLevelTank> sr;
+    mjukf::DualUkfSettingsFor<Full> sf;
+    mjukf::DualUkfSettingsFor<UpperLevelTank> sr;
     sf.initialCovariance = sr.initialCovariance = 0.5 * Eigen::Matrix2d::Identity();
     sf.processNoise = sr.processNoise = 1e-5 * Eigen::Matrix2d::Identity();
     sf.measurementNoise << 0.09, 0.01, 0.01, 0.08;

@@ -29,10 +29,10 @@ namespace mjukf {
   template class ModifiedJointUkf<models::FlexibleJoint<Scalar>>;                                    \
   template class DualUkf<models::CoupledTank<Scalar>>;                                               \
   template class DualUkf<models::FlexibleJoint<Scalar>>;                                             \
-  template struct DualUkfSettings<models::FlexibleJoint<Scalar>>;                                    \
-  template struct UkfSettings<models::FlexibleJoint<Scalar>>;                                        \
-  template struct JointUkfSettings<models::FlexibleJoint<Scalar>>;                                   \
-  template struct ModifiedJointUkfSettings<models::FlexibleJoint<Scalar>>;                           \
+  template struct DualUkfSettingsFor<models::FlexibleJoint<Scalar>>;                                    \
+  template struct UkfSettingsFor<models::FlexibleJoint<Scalar>>;                                        \
+  template struct JointUkfSettingsFor<models::FlexibleJoint<Scalar>>;                                   \
+  template struct ModifiedJointUkfSettingsFor<models::FlexibleJoint<Scalar>>;                           \
   template struct UpdateDiagnostics<Scalar, 4>;                                                      \
   template class paper::RmseAccumulator<Scalar, 2>;                                                  \
   template struct paper::CoupledTankExperiment<Scalar>;                                              \

@@ -89,7 +89,7 @@ struct AugmentedRobot {
 
 TEST(JointFilters, JointUkfEqualsUkfOnTheAugmentedModel) {
   const auto jointSettings = Robot::jointUkf();
-  mjukf::UkfSettings<AugmentedRobot> augmentedSettings;
+  mjukf::UkfSettingsFor<AugmentedRobot> augmentedSettings;
   augmentedSettings.initialCovariance = jointSettings.initialCovariance;
   augmentedSettings.processNoise = jointSettings.processNoise;
   augmentedSettings.measurementNoise = jointSettings.measurementNoise;

@@ -153,7 +153,7 @@ TEST(AutomaticModes, ConvergeOnVanDerPol) {
   std::vector<Model::Param> truth;
   simulateNoisy(model, Integrator(), Model::State(1.4, 0.0), [](long) { return Model::trueParameters(); }, h, steps,
                 0.1, y, truth);
-  mjukf::ModifiedJointUkfSettings<Model> s;
+  mjukf::ModifiedJointUkfSettingsFor<Model> s;
   s.initialCovariance.diagonal().setConstant(5);
   s.processNoise.diagonal().setConstant(1e-3);
   s.measurementNoise.diagonal().setConstant(0.1);
@@ -253,7 +253,7 @@ TEST(AutomaticModes, RefusedStepsLeaveTheAdaptiveStateUnchanged) {
   model.centre = &centre;
   mjukf::ModifiedJointUkf<FlakyRobot> filter(
       model, Robot::initialState(), Robot::initialParameters(),
-      mjukf::testing::rebindSettings<FlakyRobot>(automatic(Robot::modifiedJointUkf())));
+      automatic(Robot::modifiedJointUkf()));
   const double h = Robot::stepSize;
   const Robot::Model::Meas y = Robot::Model::Meas::Constant(0.02);
   for (int k = 0; k < 50; ++k) {

@@ -111,7 +111,7 @@ struct Oscillator {
 };
 
 mjukf::Ukf<Oscillator> gapFilter() {
-  mjukf::UkfSettings<Oscillator> s;
+  mjukf::UkfSettingsFor<Oscillator> s;
   s.sigmaPoints = {0.572, -0.749, 0.0};
   s.initialCovariance << 1.7065319924325957, 0.01622298302177394, 0.01622298302177394, 0.67422552795116664;
   s.processNoise = 1e-4 * Eigen::Matrix2d::Identity();
@@ -414,8 +414,8 @@ TEST(Masking, UkfEqualsTheUpdateOfTheReducedModel) {
   Reduced reduced;
   reduced.C.row(0) = Full().C.row(0);
   reduced.C.row(1) = Full().C.row(2);
-  mjukf::UkfSettings<Full> sf;
-  mjukf::UkfSettings<Reduced> sr;
+  mjukf::UkfSettingsFor<Full> sf;
+  mjukf::UkfSettingsFor<Reduced> sr;
   std::mt19937_64 rng(5);
   sf.initialCovariance = sr.initialCovariance = mjukf::testing::randomCovariance<3>(rng);
   sf.processNoise = sr.processNoise = mjukf::testing::randomCovariance<3>(rng, 1e-3);

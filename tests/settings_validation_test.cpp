@@ -52,7 +52,7 @@ void expectDualRejected(Mutate&& mutate, const std::string& setting,
                  setting);
 }
 
-using JointSettings = mjukf::JointUkfSettings<Robot::Model>;
+using JointSettings = mjukf::JointUkfSettingsFor<Robot::Model>;
 
 TEST(SettingsValidation, PaperSettingsAreAccepted) {
   EXPECT_NO_THROW(mjukf::Ukf<Robot::Model>(Robot::Model(), Robot::initialState(), Robot::Model::trueParameters(),
@@ -222,7 +222,7 @@ TEST(SettingsValidation, DualUkfSharedSettings) {
 // The limits of the dual filter's settings are legal: Q_θ = 0, no observation noise beyond R (the
 // defaults), λ = 1 and a small λ, bounds touching the first guess.
 TEST(SettingsValidation, DualUkfLimitsAreAccepted) {
-  const auto make = [](const mjukf::DualUkfSettings<Robot::Model>& s) {
+  const auto make = [](const mjukf::DualUkfSettingsFor<Robot::Model>& s) {
     return mjukf::DualUkf<Robot::Model>(Robot::Model(), Robot::initialState(), Robot::initialParameters(), s);
   };
   auto s = Robot::dualUkf();

@@ -103,63 +103,19 @@ struct DiscreteRobot {
   Meas measurement(const State& x, const Param& theta) const { return robot.measurement(x, theta); }
 };
 
-/// The settings of a filter over model `From` as the settings of the same filter over `To`, a model of
-/// the same scalar and dimensions (a continuous model and its discrete twin): settings are templated on
-/// the model, but their fields depend only on its sizes.
-template <class To, class From>
-UkfSettings<To> rebindSettings(const UkfSettings<From>& s) {
-  UkfSettings<To> r;
-  static_cast<UnscentedSettings<typename From::Scalar, From::StateDim, From::MeasDim>&>(r) = s;
-  return r;
-}
-template <class To, class From>
-JointUkfSettings<To> rebindSettings(const JointUkfSettings<From>& s) {
-  JointUkfSettings<To> r;
-  static_cast<ParameterEstimationSettings<typename From::Scalar, From::StateDim + From::ParamDim, From::MeasDim,
-                                          From::ParamDim>&>(r) = s;
-  return r;
-}
-template <class To, class From>
-ModifiedJointUkfSettings<To> rebindSettings(const ModifiedJointUkfSettings<From>& s) {
-  ModifiedJointUkfSettings<To> r;
-  static_cast<ParameterEstimationSettings<typename From::Scalar, From::StateDim, From::MeasDim, From::ParamDim>&>(r) =
-      s;
-  r.scaling = s.scaling;
-  r.transformation = s.transformation;
-  r.parameterSpread = s.parameterSpread;
-  r.automaticTransformation = s.automaticTransformation;
-  r.adaptiveScaling = s.adaptiveScaling;
-  r.convergenceTime = s.convergenceTime;
-  r.sensitivityInterval = s.sensitivityInterval;
-  return r;
-}
-template <class To, class From>
-DualUkfSettings<To> rebindSettings(const DualUkfSettings<From>& s) {
-  DualUkfSettings<To> r;
-  static_cast<ParameterEstimationSettings<typename From::Scalar, From::StateDim, From::MeasDim, From::ParamDim>&>(r) =
-      s;
-  r.parameterSigmaPoints = s.parameterSigmaPoints;
-  r.initialParameterCovariance = s.initialParameterCovariance;
-  r.parameterProcessNoise = s.parameterProcessNoise;
-  r.parameterObservationNoise = s.parameterObservationNoise;
-  r.parameterForgetting = s.parameterForgetting;
-  r.ordering = s.ordering;
-  return r;
-}
-
 /// The preset of the paper's `Experiment` for filter template F (the UKF's, JUKF's, MJUKF's or the dual
-/// filter's), as the settings of F over `Model`.
+/// filter's). Settings depend only on the sizes, so it serves any `Model` of the experiment's shape.
 template <template <class, class> class F, class Experiment, class Model = typename Experiment::Model>
 auto presetSettings() {
   using E = typename Experiment::Model;
   if constexpr (std::is_same_v<F<E, int>, Ukf<E, int>>)
-    return rebindSettings<Model>(Experiment::ukf());
+    return Experiment::ukf();
   else if constexpr (std::is_same_v<F<E, int>, JointUkf<E, int>>)
-    return rebindSettings<Model>(Experiment::jointUkf());
+    return Experiment::jointUkf();
   else if constexpr (std::is_same_v<F<E, int>, ModifiedJointUkf<E, int>>)
-    return rebindSettings<Model>(Experiment::modifiedJointUkf());
+    return Experiment::modifiedJointUkf();
   else
-    return rebindSettings<Model>(Experiment::dualUkf());
+    return Experiment::dualUkf();
 }
 
 /// The three filters on one experiment of the paper, built with its settings, so typed tests can

@@ -41,11 +41,11 @@ struct FilterSetup {
   typename Model::State initialState = Experiment::initialState();
   /// θ̂₀ of the joint and dual filters; the fixed parameters of the UKF, which estimates none (the truth).
   typename Model::Param initialParameters = Experiment::initialParameters();
-  UkfSettings<Model> ukf = Experiment::ukf();
-  JointUkfSettings<Model> jointUkf = Experiment::jointUkf();
-  ModifiedJointUkfSettings<Model> modifiedJointUkf = Experiment::modifiedJointUkf();
+  UkfSettingsFor<Model> ukf = Experiment::ukf();
+  JointUkfSettingsFor<Model> jointUkf = Experiment::jointUkf();
+  ModifiedJointUkfSettingsFor<Model> modifiedJointUkf = Experiment::modifiedJointUkf();
   /// Not in the paper: the library's settings of the dual UKF on the plant (Experiment::dualUkf()).
-  DualUkfSettings<Model> dualUkf = Experiment::dualUkf();
+  DualUkfSettingsFor<Model> dualUkf = Experiment::dualUkf();
 
   static FilterSetup paper(FilterKind kind) {
     FilterSetup setup;

@@ -107,7 +107,7 @@ std::vector<StudyFilter> studyFilters() {
   std::vector<StudyFilter> filters{{"jukf", FilterKind::JointUkf, false},
                                    {"mjukf", FilterKind::ModifiedJointUkf, false},
                                    {"dual", FilterKind::DualUkf, false}};
-  if constexpr (HasAutomaticModes<ModifiedJointUkfSettings<Model>>::value)
+  if constexpr (HasAutomaticModes<ModifiedJointUkfSettingsFor<Model>>::value)
     filters.push_back({"mjukf-auto", FilterKind::ModifiedJointUkf, true});
   return filters;
 }

@@ -29,19 +29,20 @@ enum class DualUkfOrdering {
   UpdatedParameters,
 };
 
-/// Settings of `DualUkf`, validated at construction. The shared fields (P₀, Q, R, …) are those of the
-/// state filter (x alone); the parameter filter has its own below.
-template <class Model>
-struct DualUkfSettings
-    : ParameterEstimationSettings<typename Model::Scalar, Model::StateDim, Model::MeasDim, Model::ParamDim> {
-  /// The model's floating-point type.
-  using Scalar = typename Model::Scalar;
+/// Settings of `DualUkf` over a model of `StateDim` states, `ParamDim` parameters and `MeasDim`
+/// measurements, validated at construction. The shared fields (P₀, Q, R, …) are those of the state
+/// filter (x alone); the parameter filter has its own below. Templated on the sizes, not the model;
+/// `DualUkf<Model>::Settings` or `DualUkfSettingsFor<Model>` name it.
+template <class Scalar_, int StateDim, int ParamDim, int MeasDim>
+struct DualUkfSettings : ParameterEstimationSettings<Scalar_, StateDim, MeasDim, ParamDim> {
+  /// The floating-point type.
+  using Scalar = Scalar_;
   /// An n × n matrix, as P₀ and Q of the state filter.
-  using StateMatrix = Eigen::Matrix<Scalar, Model::StateDim, Model::StateDim>;
+  using StateMatrix = Eigen::Matrix<Scalar, StateDim, StateDim>;
   /// A p × p matrix, as the parameter filter's covariances.
-  using ParamMatrix = Eigen::Matrix<Scalar, Model::ParamDim, Model::ParamDim>;
+  using ParamMatrix = Eigen::Matrix<Scalar, ParamDim, ParamDim>;
   /// An m × m matrix, as R.
-  using MeasMatrix = Eigen::Matrix<Scalar, Model::MeasDim, Model::MeasDim>;
+  using MeasMatrix = Eigen::Matrix<Scalar, MeasDim, MeasDim>;
   /// α, β, κ of the parameter filter's sigma points (L = p).
   SigmaPointParameters<Scalar> parameterSigmaPoints;
   /// P^θ₀, the initial parameter covariance, symmetric positive definite.
@@ -58,6 +59,9 @@ struct DualUkfSettings
   /// Whether the state's time update uses θ̂_{k−1} or the corrected θ̂_k (see DualUkfOrdering).
   DualUkfOrdering ordering = DualUkfOrdering::PriorParameters;
 };
+/// The settings of `DualUkf<Model>`.
+template <class Model>
+using DualUkfSettingsFor = DualUkfSettings<typename Model::Scalar, Model::StateDim, Model::ParamDim, Model::MeasDim>;
 
 /// Dual unscented Kalman filter: a UKF of the state x run with the current parameter estimate θ̂, and a
 /// UKF of θ (a random walk) that observes the measurement through the state filter's prediction:
@@ -75,9 +79,9 @@ struct DualUkfSettings
 /// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>>
 class DualUkf : public detail::UnscentedEngine<DualUkf<Model_, Integrator_>, Model_, Integrator_,
-                                               DualUkfSettings<Model_>, Model_::StateDim> {
+                                               DualUkfSettingsFor<Model_>, Model_::StateDim> {
   static_assert(checkModel<Model_, 1>());
-  using Engine = detail::UnscentedEngine<DualUkf<Model_, Integrator_>, Model_, Integrator_, DualUkfSettings<Model_>,
+  using Engine = detail::UnscentedEngine<DualUkf<Model_, Integrator_>, Model_, Integrator_, DualUkfSettingsFor<Model_>,
                                          Model_::StateDim>;
   friend Engine;
 
@@ -86,7 +90,7 @@ class DualUkf : public detail::UnscentedEngine<DualUkf<Model_, Integrator_>, Mod
   using typename Engine::Input, typename Engine::Meas, typename Engine::Param, typename Engine::Scalar,
       typename Engine::State;
   /// The settings struct of this filter.
-  using Settings = DualUkfSettings<Model_>;
+  using Settings = DualUkfSettingsFor<Model_>;
   /// n, p and m: the model's sizes.
   using Engine::StateDim, Engine::ParamDim, Engine::MeasDim;
   static constexpr int SigmaPointCount = 2 * StateDim + 1;           ///< of the state filter

@@ -15,16 +15,21 @@
 
 namespace mjukf {
 
-/// Settings of `JointUkf`, validated at construction. P₀ and Q are of the augmented vector [x; θ]:
-/// their θ block is the parameters' initial uncertainty and random-walk process noise.
-template <class Model>
-struct JointUkfSettings : ParameterEstimationSettings<typename Model::Scalar, Model::StateDim + Model::ParamDim,
-                                                      Model::MeasDim, Model::ParamDim> {
+/// Settings of `JointUkf` over a model of `StateDim` states, `ParamDim` parameters and `MeasDim`
+/// measurements, validated at construction. P₀ and Q are of the augmented vector [x; θ]: their θ block
+/// is the parameters' initial uncertainty and random-walk process noise. Templated on the sizes, not
+/// the model; `JointUkf<Model>::Settings` or `JointUkfSettingsFor<Model>` name it.
+template <class Scalar, int StateDim, int ParamDim, int MeasDim>
+struct JointUkfSettings : ParameterEstimationSettings<Scalar, StateDim + ParamDim, MeasDim, ParamDim> {
   /// n + p, the dimension of the augmented vector [x; θ].
-  static constexpr int AugmentedDim = Model::StateDim + Model::ParamDim;
+  static constexpr int AugmentedDim = StateDim + ParamDim;
   /// The type of P₀ and Q of [x; θ].
-  using AugmentedMatrix = Eigen::Matrix<typename Model::Scalar, AugmentedDim, AugmentedDim>;
+  using AugmentedMatrix = Eigen::Matrix<Scalar, AugmentedDim, AugmentedDim>;
 };
+/// The settings of `JointUkf<Model>`.
+template <class Model>
+using JointUkfSettingsFor =
+    JointUkfSettings<typename Model::Scalar, Model::StateDim, Model::ParamDim, Model::MeasDim>;
 
 /// Joint unscented Kalman filter: estimates z = [x; θ] with L = n + p, the parameters constant in the
 /// model (θ̇ = 0). A time update costs 2(n + p) + 1 model propagations.
@@ -38,9 +43,9 @@ struct JointUkfSettings : ParameterEstimationSettings<typename Model::Scalar, Mo
 /// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>>
 class JointUkf : public detail::UnscentedEngine<JointUkf<Model_, Integrator_>, Model_, Integrator_,
-                                                JointUkfSettings<Model_>, Model_::StateDim + Model_::ParamDim> {
+                                                JointUkfSettingsFor<Model_>, Model_::StateDim + Model_::ParamDim> {
   static_assert(checkModel<Model_, 1>());
-  using Engine = detail::UnscentedEngine<JointUkf<Model_, Integrator_>, Model_, Integrator_, JointUkfSettings<Model_>,
+  using Engine = detail::UnscentedEngine<JointUkf<Model_, Integrator_>, Model_, Integrator_, JointUkfSettingsFor<Model_>,
                                          Model_::StateDim + Model_::ParamDim>;
   friend Engine;
 
@@ -48,7 +53,7 @@ class JointUkf : public detail::UnscentedEngine<JointUkf<Model_, Integrator_>, M
   /// The model's scalar and vector types (see the engine, detail/unscented_engine.hpp).
   using typename Engine::Param, typename Engine::Scalar, typename Engine::State;
   /// The settings struct of this filter.
-  using Settings = JointUkfSettings<Model_>;
+  using Settings = JointUkfSettingsFor<Model_>;
   /// n and p: the model's sizes.
   using Engine::StateDim, Engine::ParamDim;
   /// n + p, the dimension of the augmented vector [x; θ].

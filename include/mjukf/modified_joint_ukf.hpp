@@ -21,19 +21,20 @@
 
 namespace mjukf {
 
-/// Settings of `ModifiedJointUkf`, validated at construction: P₀ and Q of the state x, and the
-/// parameter step of eqs. 8–9.
-template <class Model>
-struct ModifiedJointUkfSettings
-    : ParameterEstimationSettings<typename Model::Scalar, Model::StateDim, Model::MeasDim, Model::ParamDim> {
-  /// The model's floating-point type.
-  using Scalar = typename Model::Scalar;
+/// Settings of `ModifiedJointUkf` over a model of `StateDim` states, `ParamDim` parameters and
+/// `MeasDim` measurements, validated at construction: P₀ and Q of the state x, and the parameter step
+/// of eqs. 8–9. Templated on the sizes, not the model; `ModifiedJointUkf<Model>::Settings` or
+/// `ModifiedJointUkfSettingsFor<Model>` name it.
+template <class Scalar_, int StateDim, int ParamDim, int MeasDim>
+struct ModifiedJointUkfSettings : ParameterEstimationSettings<Scalar_, StateDim, MeasDim, ParamDim> {
+  /// The floating-point type.
+  using Scalar = Scalar_;
   /// The type of P₀ and Q (n × n).
-  using StateMatrix = Eigen::Matrix<Scalar, Model::StateDim, Model::StateDim>;
+  using StateMatrix = Eigen::Matrix<Scalar, StateDim, StateDim>;
   /// The parameter vector θ.
-  using Param = typename Model::Param;
+  using Param = Eigen::Matrix<Scalar, ParamDim, 1>;
   /// The type of T (p × m).
-  using Transformation = Eigen::Matrix<Scalar, Model::ParamDim, Model::MeasDim>;
+  using Transformation = Eigen::Matrix<Scalar, ParamDim, MeasDim>;
   /// ξ, the scaling parameter of eq. 9, θᵢ ← θ̂ − ξ T (y − Yᵢ). Sign: θ̂ approaches the truth when
   /// ξ (T ψ)ᵣᵣ < 0 for each parameter r, ψ = ∂ŷ/∂θ̂ through the dynamics; with T ≥ 0, ξ is negative
   /// when the measurements rise with the parameter (the tank's ∂y/∂k_flow > 0 takes ξ = −1; ξ = +1
@@ -61,6 +62,10 @@ struct ModifiedJointUkfSettings
   /// time update (p extra propagations each) and kept in between; 0: once, at the first time update.
   int sensitivityInterval = 1;
 };
+/// The settings of `ModifiedJointUkf<Model>`.
+template <class Model>
+using ModifiedJointUkfSettingsFor =
+    ModifiedJointUkfSettings<typename Model::Scalar, Model::StateDim, Model::ParamDim, Model::MeasDim>;
 
 /// Modified joint unscented Kalman filter. Sigma points are drawn for the state alone (L = n, 2n + 1
 /// points); point i is propagated with its own parameter vector θᵢ, and the θᵢ are moved against the
@@ -86,17 +91,17 @@ struct ModifiedJointUkfSettings
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>>
 class ModifiedJointUkf
     : public detail::UnscentedEngine<ModifiedJointUkf<Model_, Integrator_>, Model_, Integrator_,
-                                     ModifiedJointUkfSettings<Model_>, Model_::StateDim> {
+                                     ModifiedJointUkfSettingsFor<Model_>, Model_::StateDim> {
   static_assert(checkModel<Model_, 1>());
   using Engine = detail::UnscentedEngine<ModifiedJointUkf<Model_, Integrator_>, Model_, Integrator_,
-                                         ModifiedJointUkfSettings<Model_>, Model_::StateDim>;
+                                         ModifiedJointUkfSettingsFor<Model_>, Model_::StateDim>;
   friend Engine;
 
  public:
   /// The model's scalar and vector types (see the engine, detail/unscented_engine.hpp).
   using typename Engine::Meas, typename Engine::Param, typename Engine::Scalar, typename Engine::State;
   /// The settings struct of this filter.
-  using Settings = ModifiedJointUkfSettings<Model_>;
+  using Settings = ModifiedJointUkfSettingsFor<Model_>;
   /// n, p and m: the model's sizes.
   using Engine::StateDim, Engine::ParamDim, Engine::MeasDim;
   /// 2n + 1 sigma points, each with its own parameter vector θᵢ.

@@ -14,12 +14,17 @@
 
 namespace mjukf {
 
-/// Settings of `Ukf`, validated at construction: P₀ and Q of the state x.
-template <class Model>
-struct UkfSettings : UnscentedSettings<typename Model::Scalar, Model::StateDim, Model::MeasDim> {
+/// Settings of `Ukf` over a model of `StateDim` states and `MeasDim` measurements, validated at
+/// construction: P₀ and Q of the state x. Templated on the sizes, not the model, so one value serves
+/// every model of the same shape; `Ukf<Model>::Settings` or `UkfSettingsFor<Model>` name it.
+template <class Scalar, int StateDim, int MeasDim>
+struct UkfSettings : UnscentedSettings<Scalar, StateDim, MeasDim> {
   /// The type of P₀ and Q (n × n).
-  using StateMatrix = Eigen::Matrix<typename Model::Scalar, Model::StateDim, Model::StateDim>;
+  using StateMatrix = Eigen::Matrix<Scalar, StateDim, StateDim>;
 };
+/// The settings of `Ukf<Model>`.
+template <class Model>
+using UkfSettingsFor = UkfSettings<typename Model::Scalar, Model::StateDim, Model::MeasDim>;
 
 /// Unscented Kalman filter of the state of `Model`, whose parameters are known and fixed.
 ///
@@ -32,18 +37,18 @@ struct UkfSettings : UnscentedSettings<typename Model::Scalar, Model::StateDim, 
 /// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
 /// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>>
-class Ukf : public detail::UnscentedEngine<Ukf<Model_, Integrator_>, Model_, Integrator_, UkfSettings<Model_>,
+class Ukf : public detail::UnscentedEngine<Ukf<Model_, Integrator_>, Model_, Integrator_, UkfSettingsFor<Model_>,
                                            Model_::StateDim> {
   static_assert(checkModel<Model_>());
   using Engine =
-      detail::UnscentedEngine<Ukf<Model_, Integrator_>, Model_, Integrator_, UkfSettings<Model_>, Model_::StateDim>;
+      detail::UnscentedEngine<Ukf<Model_, Integrator_>, Model_, Integrator_, UkfSettingsFor<Model_>, Model_::StateDim>;
   friend Engine;
 
  public:
   /// The model's scalar and vector types (see the engine, detail/unscented_engine.hpp).
   using typename Engine::Param, typename Engine::Scalar, typename Engine::State;
   /// The settings struct of this filter.
-  using Settings = UkfSettings<Model_>;
+  using Settings = UkfSettingsFor<Model_>;
   /// An n × n matrix: the state covariance.
   using StateMatrix = Eigen::Matrix<Scalar, Engine::StateDim, Engine::StateDim>;
   /// 2n + 1 sigma points.

@@ -228,7 +228,7 @@ template <class Stepper>
 void jointUkfConverges(const Stepper& stepper) {
   using Tank = models::CoupledTank<double>;
   const Tank tank;
-  JointUkfSettings<Tank> settings;
+  JointUkfSettingsFor<Tank> settings;
   settings.initialCovariance = Eigen::Vector3d(1, 1, 10).asDiagonal();
   settings.processNoise = Eigen::Vector3d(1e-6, 1e-6, 1e-6).asDiagonal();
   settings.measurementNoise = Eigen::Vector2d(1e-4, 1e-4).asDiagonal();
@@ -253,7 +253,7 @@ TEST(Integrators, JointUkfWithEveryStepper) {
 TEST(Integrators, UkfAndModifiedJointUkfWithOtherSteppers) {
   using Robot = models::FlexibleJoint<double>;
   const Robot robot;
-  ModifiedJointUkfSettings<Robot> settings;
+  ModifiedJointUkfSettingsFor<Robot> settings;
   settings.initialCovariance = Eigen::Matrix4d::Identity() * 1e-2;
   settings.processNoise = Eigen::Matrix4d::Identity() * 1e-8;
   settings.measurementNoise = Eigen::Matrix4d::Identity() * 1e-4;
@@ -272,7 +272,7 @@ TEST(Integrators, UkfAndModifiedJointUkfWithOtherSteppers) {
   EXPECT_LT((mjukf.state() - implicitMjukf.state()).cwiseAbs().maxCoeff(), 1e-4);
 
   using TankF = models::CoupledTank<float>;
-  UkfSettings<TankF> ukfSettings;
+  UkfSettingsFor<TankF> ukfSettings;
   ukfSettings.initialCovariance = Eigen::Vector2f(1, 1).asDiagonal();
   ukfSettings.processNoise = Eigen::Vector2f(1e-6f, 1e-6f).asDiagonal();
   ukfSettings.measurementNoise = Eigen::Vector2f(1e-2f, 1e-2f).asDiagonal();

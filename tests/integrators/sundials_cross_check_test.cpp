@@ -220,7 +220,7 @@ TEST(SundialsCrossCheck, CvodeReportsErrors) {
 TEST(SundialsCrossCheck, CvodeDrivesAJointUkf) {
   using Tank = models::CoupledTank<double>;
   const Tank tank;
-  JointUkfSettings<Tank> settings;
+  JointUkfSettingsFor<Tank> settings;
   settings.initialCovariance = Eigen::Vector3d(1, 1, 10).asDiagonal();
   settings.processNoise = Eigen::Vector3d(1e-6, 1e-6, 1e-6).asDiagonal();
   settings.measurementNoise = Eigen::Vector2d(1e-4, 1e-4).asDiagonal();

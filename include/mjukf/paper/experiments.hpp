@@ -37,8 +37,8 @@ struct CoupledTankExperiment {
   static Param initialParameters() { return Param::Constant(Scalar(2)); }
 
   /// The state-only filter, given the true k_flow: P₀, Q and R as for MJUKF.
-  static UkfSettings<Model> ukf() {
-    UkfSettings<Model> s;
+  static UkfSettingsFor<Model> ukf() {
+    UkfSettingsFor<Model> s;
     s.initialCovariance.diagonal().setConstant(Scalar(0.5));
     s.processNoise.diagonal().setConstant(Scalar(1e-5));
     s.measurementNoise.diagonal().setConstant(Scalar(1e-7));
@@ -46,8 +46,8 @@ struct CoupledTankExperiment {
   }
 
   /// JUKF's settings (docs/plants.md §5).
-  static JointUkfSettings<Model> jointUkf() {
-    JointUkfSettings<Model> s;
+  static JointUkfSettingsFor<Model> jointUkf() {
+    JointUkfSettingsFor<Model> s;
     s.initialCovariance.diagonal() << Scalar(0.5), Scalar(0.5), Scalar(0.1);
     s.processNoise.diagonal().setConstant(Scalar(1e-5));
     s.measurementNoise.diagonal().setConstant(Scalar(1e-7));
@@ -55,8 +55,8 @@ struct CoupledTankExperiment {
   }
 
   /// MJUKF's settings (docs/plants.md §5).
-  static ModifiedJointUkfSettings<Model> modifiedJointUkf() {
-    ModifiedJointUkfSettings<Model> s;
+  static ModifiedJointUkfSettingsFor<Model> modifiedJointUkf() {
+    ModifiedJointUkfSettingsFor<Model> s;
     s.initialCovariance.diagonal().setConstant(Scalar(0.5));
     s.processNoise.diagonal().setConstant(Scalar(1e-5));
     s.measurementNoise.diagonal().setConstant(Scalar(1e-7));
@@ -71,8 +71,8 @@ struct CoupledTankExperiment {
   /// data (0.09, from first differences of the reference file). With R = 1e-7 alone, far below the
   /// data's noise, the parameter filter chases the noise (k_flow swings between about −6 and 21); with
   /// the preset it is steady but slow (docs/reproducing-the-paper.md).
-  static DualUkfSettings<Model> dualUkf() {
-    DualUkfSettings<Model> s;
+  static DualUkfSettingsFor<Model> dualUkf() {
+    DualUkfSettingsFor<Model> s;
     static_cast<UnscentedSettings<Scalar, Model::StateDim, Model::MeasDim>&>(s) = ukf();
     s.initialParameterCovariance.diagonal().setConstant(Scalar(0.1));
     s.parameterProcessNoise.diagonal().setConstant(Scalar(1e-5));
@@ -108,8 +108,8 @@ struct FlexibleJointExperiment {
   static Param initialParameters() { return Param(Scalar(0.1), Scalar(0.15)); }
 
   /// The state-only filter, given the true parameters: P₀, Q and R as for MJUKF.
-  static UkfSettings<Model> ukf() {
-    UkfSettings<Model> s;
+  static UkfSettingsFor<Model> ukf() {
+    UkfSettingsFor<Model> s;
     s.initialCovariance.diagonal().setConstant(Scalar(0.5));
     s.processNoise.diagonal().setConstant(Scalar(1e-5));
     s.measurementNoise.diagonal().setConstant(Scalar(1e-3));
@@ -117,8 +117,8 @@ struct FlexibleJointExperiment {
   }
 
   /// JUKF's settings (docs/plants.md §5).
-  static JointUkfSettings<Model> jointUkf() {
-    JointUkfSettings<Model> s;
+  static JointUkfSettingsFor<Model> jointUkf() {
+    JointUkfSettingsFor<Model> s;
     s.initialCovariance.diagonal() << Scalar(0.5), Scalar(0.5), Scalar(0.5), Scalar(0.5), Scalar(1e-3),
         Scalar(1e-3);
     s.processNoise.diagonal().setConstant(Scalar(1e-5));
@@ -127,8 +127,8 @@ struct FlexibleJointExperiment {
   }
 
   /// MJUKF's settings (docs/plants.md §5).
-  static ModifiedJointUkfSettings<Model> modifiedJointUkf() {
-    ModifiedJointUkfSettings<Model> s;
+  static ModifiedJointUkfSettingsFor<Model> modifiedJointUkf() {
+    ModifiedJointUkfSettingsFor<Model> s;
     s.initialCovariance.diagonal().setConstant(Scalar(0.5));
     s.processNoise.diagonal().setConstant(Scalar(1e-5));
     s.measurementNoise.diagonal().setConstant(Scalar(1e-3));
@@ -142,8 +142,8 @@ struct FlexibleJointExperiment {
   /// Not in the paper. The state filter as the UKF's; the parameter filter starts from JUKF's θ block
   /// (P^θ₀ = 1e-3 I, Q_θ = 1e-5 I) and observes with R plus the measurement noise variance of the
   /// 30 dB data (0.05 I, from first differences of the reference file).
-  static DualUkfSettings<Model> dualUkf() {
-    DualUkfSettings<Model> s;
+  static DualUkfSettingsFor<Model> dualUkf() {
+    DualUkfSettingsFor<Model> s;
     static_cast<UnscentedSettings<Scalar, Model::StateDim, Model::MeasDim>&>(s) = ukf();
     s.initialParameterCovariance.diagonal().setConstant(Scalar(1e-3));
     s.parameterProcessNoise.diagonal().setConstant(Scalar(1e-5));

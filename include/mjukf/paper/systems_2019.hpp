@@ -42,8 +42,8 @@ struct Settings2019 {
   Scalar stateP0, stateQ, r, parameterP0, parameterQ;
 
   /// The state-only UKF's settings: P₀, Q and R.
-  UkfSettings<Model> ukf() const {
-    UkfSettings<Model> s;
+  UkfSettingsFor<Model> ukf() const {
+    UkfSettingsFor<Model> s;
     s.initialCovariance.diagonal().setConstant(stateP0);
     s.processNoise.diagonal().setConstant(stateQ);
     s.measurementNoise.diagonal().setConstant(r);
@@ -51,8 +51,8 @@ struct Settings2019 {
   }
 
   /// JUKF's settings: P₀ and Q with the state's block then the parameters' block, and R.
-  JointUkfSettings<Model> jointUkf() const {
-    JointUkfSettings<Model> s;
+  JointUkfSettingsFor<Model> jointUkf() const {
+    JointUkfSettingsFor<Model> s;
     s.initialCovariance.diagonal() << Eigen::Matrix<Scalar, Model::StateDim, 1>::Constant(stateP0),
         Eigen::Matrix<Scalar, Model::ParamDim, 1>::Constant(parameterP0);
     s.processNoise.diagonal() << Eigen::Matrix<Scalar, Model::StateDim, 1>::Constant(stateQ),
@@ -62,8 +62,8 @@ struct Settings2019 {
   }
 
   /// ξ, T and p_θ are the caller's (they differ per system).
-  ModifiedJointUkfSettings<Model> modifiedJointUkf() const {
-    ModifiedJointUkfSettings<Model> s;
+  ModifiedJointUkfSettingsFor<Model> modifiedJointUkf() const {
+    ModifiedJointUkfSettingsFor<Model> s;
     s.initialCovariance.diagonal().setConstant(stateP0);
     s.processNoise.diagonal().setConstant(stateQ);
     s.measurementNoise.diagonal().setConstant(r);
@@ -72,8 +72,8 @@ struct Settings2019 {
 
   /// The state filter as the UKF's; the parameter filter starts from JUKF's θ block and observes with R
   /// alone (no extra parameterObservationNoise).
-  DualUkfSettings<Model> dualUkf() const {
-    DualUkfSettings<Model> s;
+  DualUkfSettingsFor<Model> dualUkf() const {
+    DualUkfSettingsFor<Model> s;
     static_cast<UnscentedSettings<Scalar, Model::StateDim, Model::MeasDim>&>(s) = ukf();
     s.initialParameterCovariance.diagonal().setConstant(parameterP0);
     s.parameterProcessNoise.diagonal().setConstant(parameterQ);
@@ -104,11 +104,11 @@ struct Experiment2019 {
   static constexpr Scalar relativeNoise = Scalar(0.1);
 
   /// The state-only filter, given the true parameters: P₀, Q and R of `Experiment::common()`.
-  static UkfSettings<Model> ukf() { return Experiment::common().ukf(); }
+  static UkfSettingsFor<Model> ukf() { return Experiment::common().ukf(); }
   /// JUKF's settings, from `Experiment::common()`.
-  static JointUkfSettings<Model> jointUkf() { return Experiment::common().jointUkf(); }
+  static JointUkfSettingsFor<Model> jointUkf() { return Experiment::common().jointUkf(); }
   /// Not in the 2019 paper: the dual UKF's settings, from `Experiment::common()`.
-  static DualUkfSettings<Model> dualUkf() { return Experiment::common().dualUkf(); }
+  static DualUkfSettingsFor<Model> dualUkf() { return Experiment::common().dualUkf(); }
 };
 
 /// Van der Pol, μ = 0.2: 100 s at h = 0.1 s with RK4 from x₀ = (1.4, 0), a measurement every step;
@@ -139,7 +139,7 @@ struct VanDerPolExperiment : Experiment2019<VanDerPolExperiment<Scalar>, models:
   }
 
   /// ξ = 0.25, T = [0.5 0.5], p_θ = 0.5 (2019).
-  static ModifiedJointUkfSettings<Model> modifiedJointUkf() {
+  static ModifiedJointUkfSettingsFor<Model> modifiedJointUkf() {
     auto s = common().modifiedJointUkf();
     s.scaling = Scalar(0.25);
     s.transformation << Scalar(0.5), Scalar(0.5);
@@ -176,7 +176,7 @@ struct LorenzExperiment : Experiment2019<LorenzExperiment<Scalar>, models::Loren
   }
 
   /// ξ = 0.006, T = [[0.8 0.1 0.1], [0.1 0.8 0.1], [0.1 0.1 0.8]], p_θ = 0.5 (2019).
-  static ModifiedJointUkfSettings<Model> modifiedJointUkf() {
+  static ModifiedJointUkfSettingsFor<Model> modifiedJointUkf() {
     auto s = common().modifiedJointUkf();
     s.scaling = Scalar(0.006);
     s.transformation << Scalar(0.8), Scalar(0.1), Scalar(0.1),  //
