@@ -7,9 +7,6 @@
 
 #include <Eigen/Core>
 
-#include "mjukf/detail/finite.hpp"
-#include "mjukf/detail/propagation.hpp"
-#include "mjukf/detail/unscented_core.hpp"
 #include "mjukf/detail/unscented_engine.hpp"
 #include "mjukf/detail/validation.hpp"
 #include "mjukf/filter_settings.hpp"
@@ -63,6 +60,229 @@ struct DualUkfSettings : ParameterEstimationSettings<Scalar_, StateDim, MeasDim,
 template <class Model>
 using DualUkfSettingsFor = DualUkfSettings<typename Model::Scalar, Model::StateDim, Model::ParamDim, Model::MeasDim>;
 
+namespace detail {
+
+/// The parameter policy of `DualUkf` (docs/algorithms.md §9): a second unscented estimate, of θ, with a
+/// random-walk time update, whose sigma points θⱼ are measured through the state filter's prediction,
+/// Dⱼ = g(Φ_h(x̂_{k−1}; θⱼ), θⱼ). Its measurement update corrects the parameters first, then the state
+/// (with the UpdatedParameters ordering, after predicting the state's last step again with the
+/// corrected θ̂); the engine commits both or neither. detail/unscented_engine.hpp §3 lists what a
+/// policy supplies.
+template <class Model, class Integrator, class Settings, class Est, class PointSet>
+class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> {
+ public:
+  using Scalar = typename Model::Scalar;
+  using State = typename Model::State;
+  using Param = typename Model::Param;
+  using Meas = typename Model::Meas;
+  using Input = typename Model::Input;
+  using Vector = typename Est::Vector;
+  using Mask = typename Est::Mask;
+  static constexpr int StateDim = Model::StateDim, ParamDim = Model::ParamDim, MeasDim = Model::MeasDim;
+  /// The parameter filter: an estimate of θ measured through the m components of y.
+  using ParameterEstimate = Estimate<Scalar, ParamDim, MeasDim, PointSet>;
+  static constexpr int ParameterCount = ParameterEstimate::Count;
+
+  DualParameters(const Settings& s, const Param& initialParameters)
+      : estimate_(Validated{}, s.parameterSigmaPoints),
+        observationNoise_(s.measurementNoise + s.parameterObservationNoise),
+        boundsActive_(s.parameterBounds.active()),
+        storesStep_(s.ordering == DualUkfOrdering::UpdatedParameters) {
+    estimate_.assign(initialParameters, s.initialParameterCovariance);  // checked in validate()
+  }
+
+  const ParameterEstimate& estimate() const { return estimate_; }
+  // Starts the parameter filter again (both arguments checked by the filter's reset()).
+  void reset(const Param& parameters, const Eigen::Matrix<Scalar, ParamDim, ParamDim>& covariance) {
+    estimate_.assign(parameters, covariance);
+    hasPrior_ = false;
+  }
+
+  // The parameter time update, θ̂⁻ = θ̂, P^θ⁻ = P^θ / λ + Q_θ, and the propagation of x̂_{k−1} with each
+  // θⱼ of (θ̂⁻, P^θ⁻) over the step, into the candidates.
+  template <class Step>
+  Status predictParameters(const Step& step, const Est& state) {
+    const Settings& s = step.settings;
+    ParameterEstimate& pe = estimate_;
+    pe.candidateMean() = pe.mean();
+    pe.candidateCovariance() = pe.covariance() / s.parameterForgetting + s.parameterProcessNoise;
+    const Status settled = pe.settle(s.repair);
+    if (!taken(settled)) return settled;
+    if (const Status drawn = pe.draw(pe.candidateMean(), pe.candidateFactor()); drawn != Status::Ok) return drawn;
+    for (int j = 0; j < ParameterCount; ++j) {
+      const Param theta = pe.workPoints().col(j);
+      candidatePropagatedStates_.col(j) = step.propagate(theta, state.mean());
+    }
+    if (!allFinite(candidatePropagatedStates_)) return Status::NonFiniteResult;
+    if (s.ordering == DualUkfOrdering::UpdatedParameters) {
+      constexpr bool held = std::is_same_v<typename Step::InputType, HeldInput<Model>>;
+      candidatePriorMean_ = state.mean();
+      candidatePriorFactor_ = state.factor();
+      candidateStep_.t = step.t;
+      candidateStep_.h = step.h;
+      candidateStep_.steps = step.steps;
+      candidateStep_.fromSignal = !held;
+      if constexpr (held) candidateStep_.held = step.input.value;
+    }
+    return settled;
+  }
+  // χᵢ⁺ = Φ_h(χᵢ; t, θ̂)
+  template <class Step>
+  void propagatePoints(const Step& step, typename Est::Points& points) {
+    const Param& theta = stateFilterParameters();
+    for (int i = 0; i < Est::Count; ++i) points.col(i) = step.propagate(theta, points.col(i));
+  }
+  template <class Step>
+  Vector propagateMean(const Step& step, const Vector& mean) {
+    return step.propagate(estimate_.mean(), mean);
+  }
+  // Yᵢ = g(χᵢ⁺, θ̂)
+  void measurePoints(const Model& model, const typename Est::Points& points, typename Est::MeasPoints& measured) {
+    const Param& theta = stateFilterParameters();
+    for (int i = 0; i < Est::Count; ++i) measured.col(i) = model.measurement(points.col(i), theta);
+  }
+
+  // The parameters first, into their candidates, then the state; the engine's correctAndCommit commits
+  // both (commitCorrection) or neither.
+  template <class Engine>
+  Status update(Engine& engine, const Meas& y, const Mask* present) {
+    const Status parameters = correctParameterFilter(engine.model(), engine.settings(), engine.state(), y, present);
+    if (!taken(parameters)) return parameters;
+    Status state;
+    if (engine.settings().ordering == DualUkfOrdering::UpdatedParameters && hasPrior_) {
+      useCorrectedParameters_ = true;
+      state = predictStateAgain(engine);
+      if (taken(state)) {
+        auto& est = engine.estimate_;
+        if (engine.settings().redrawPointsForUpdate) est.draw(repredictedMean_, est.candidateFactor());
+        const Status corrected =
+            engine.correctAndCommit(est.workPoints(), repredictedMean_, repredictedCovariance_, y, present);
+        state = taken(corrected) ? combineTaken(corrected, state) : corrected;
+      }
+      useCorrectedParameters_ = false;
+    } else {
+      state = engine.correctState(y, present);
+    }
+    return taken(state) ? combineTaken(state, parameters) : state;
+  }
+  Status correctParameters(const Correction<Model, Settings, Est>&) { return Status::Ok; }
+  void constrainMean(Vector&) {}
+
+  void commitPrediction() {
+    estimate_.commitPrediction();
+    propagatedStates_ = candidatePropagatedStates_;
+    if (storesStep_) {
+      priorMean_ = candidatePriorMean_;
+      priorFactor_ = candidatePriorFactor_;
+      step_ = candidateStep_;
+      hasPrior_ = true;
+    }
+  }
+  void commitCorrection() {
+    estimate_.commitCorrection();
+    hasPrior_ = false;
+  }
+  void commitOpenLoop(Scalar) {
+    estimate_.commitMean(estimate_.mean());  // its θⱼ were propagated from an x̂ that moved on
+    hasPrior_ = false;
+  }
+
+ private:
+  using PropagatedStates = Eigen::Matrix<Scalar, StateDim, ParameterCount>;
+  using StateMatrix = Eigen::Matrix<Scalar, StateDim, StateDim>;
+
+  // The time step a measurement update of the UpdatedParameters ordering runs again.
+  struct StoredStep {
+    Scalar t = 0, h = 0;
+    int steps = 0;
+    bool fromSignal = false;  // the model's u(t), or `held`
+    Input held = Input::Zero();
+  };
+
+  // The parameters the state filter runs with: θ̂⁻, or θ̂_k while the UpdatedParameters ordering
+  // predicts and corrects the state again.
+  const Param& stateFilterParameters() const {
+    return useCorrectedParameters_ ? estimate_.candidateMean() : estimate_.mean();
+  }
+
+  // §3 for the parameter filter (R + parameterObservationNoise as the observation noise; no gate: the
+  // state's gate decides), into its candidates, with bounds applied; committed with the state's
+  // correction.
+  Status correctParameterFilter(const Model& model, const Settings& s, const State& state, const Meas& y,
+                                const Mask* present) {
+    ParameterEstimate& pe = estimate_;
+    const bool drawn = !pe.hasPoints();
+    if (drawn)
+      if (const Status st = pe.draw(pe.mean(), pe.factor()); st != Status::Ok) return st;
+    const auto& thetas = drawn ? pe.workPoints() : pe.points();
+    for (int j = 0; j < ParameterCount; ++j)  // Dⱼ = g(Φ_h(x̂_{k−1}; θⱼ), θⱼ)
+      pe.measuredPoints().col(j) = model.measurement(drawn ? state : State(propagatedStates_.col(j)), thetas.col(j));
+    if (const Status st = pe.correct(thetas, pe.measuredPoints(), pe.mean(), pe.covariance(), y, observationNoise_,
+                                     present, noGate_);
+        st != Status::Ok)
+      return st;
+    if (!allFinite(pe.candidateMean())) return Status::NonFiniteResult;
+    const Status settled = pe.settle(s.repair);
+    if (!taken(settled)) return settled;
+    if (boundsActive_) s.parameterBounds.clamp(pe.candidateMean());
+    return settled;
+  }
+
+  // The UpdatedParameters ordering: the state's last time update again, through the engine's own
+  // prediction, from x̂_{k−1} and the factor of P_{k−1}, with θ̂_k, into repredictedMean_ and
+  // repredictedCovariance_ and the engine's work points.
+  template <class Engine>
+  Status predictStateAgain(Engine& engine) {
+    using Settings_ = typename Engine::Settings;
+    Status settled;
+    if constexpr (hasInputSignal<Model>) {
+      if (step_.fromSignal) {
+        const SharedSignalInput<Model> input(engine.model());
+        const TimeStep<Model, Integrator, SharedSignalInput<Model>, Settings_> step{
+            engine.model(), engine.integrator(), engine.settings(), input, step_.t, step_.h, step_.steps};
+        settled = engine.predict(step, priorMean_, priorFactor_);
+      } else {
+        settled = predictAgainHeld(engine);
+      }
+    } else {
+      settled = predictAgainHeld(engine);
+    }
+    if (!taken(settled)) return settled;
+    repredictedMean_ = engine.estimate_.candidateMean();
+    repredictedCovariance_ = engine.estimate_.candidateCovariance();
+    return settled;
+  }
+  template <class Engine>
+  Status predictAgainHeld(Engine& engine) {
+    const HeldInput<Model> input{step_.held};
+    const TimeStep<Model, Integrator, HeldInput<Model>, typename Engine::Settings> step{
+        engine.model(), engine.integrator(), engine.settings(), input, step_.t, step_.h, step_.steps};
+    return engine.predict(step, priorMean_, priorFactor_);
+  }
+
+  ParameterEstimate estimate_;  // θ̂, P^θ, the θⱼ
+  Eigen::Matrix<Scalar, MeasDim, MeasDim> observationNoise_;  // R + parameterObservationNoise
+  bool boundsActive_;
+  bool storesStep_;  // the UpdatedParameters ordering
+  MeasurementGate<Scalar, MeasDim> noGate_;
+  PropagatedStates propagatedStates_ = PropagatedStates::Zero();  // Φ_h(x̂_{k−1}; θⱼ) of the last time update
+  // The UpdatedParameters ordering: the state filter's prior of the last time update and its step.
+  State priorMean_ = State::Zero();
+  StateMatrix priorFactor_ = StateMatrix::Zero();
+  StoredStep step_;
+  bool hasPrior_ = false;
+  bool useCorrectedParameters_ = false;
+  // Workspace, committed only with the step that made it.
+  PropagatedStates candidatePropagatedStates_ = PropagatedStates::Zero();
+  State candidatePriorMean_ = State::Zero();
+  StateMatrix candidatePriorFactor_ = StateMatrix::Zero();
+  StoredStep candidateStep_;
+  State repredictedMean_ = State::Zero();
+  StateMatrix repredictedCovariance_ = StateMatrix::Zero();
+};
+
+}  // namespace detail
+
 /// Dual unscented Kalman filter: a UKF of the state x run with the current parameter estimate θ̂, and a
 /// UKF of θ (a random walk) that observes the measurement through the state filter's prediction:
 /// its sigma points θⱼ are measured as Dⱼ = g(Φ_h(x̂_{k−1}; t, θⱼ), θⱼ). The cross-covariance of x and
@@ -77,13 +297,21 @@ using DualUkfSettingsFor = DualUkfSettings<typename Model::Scalar, Model::StateD
 ///
 /// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
 /// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
-template <class Model_, class Integrator_ = DefaultIntegrator<Model_>>
-class DualUkf : public detail::UnscentedEngine<DualUkf<Model_, Integrator_>, Model_, Integrator_,
-                                               DualUkfSettingsFor<Model_>, Model_::StateDim> {
+template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled>
+class DualUkf
+    : public detail::UnscentedEngine<
+          DualUkf<Model_, Integrator_, PointSet>, Model_, Integrator_, DualUkfSettingsFor<Model_>,
+          detail::DualParameters<Model_, Integrator_, DualUkfSettingsFor<Model_>,
+                                 detail::Estimate<typename Model_::Scalar, Model_::StateDim, Model_::MeasDim, PointSet>,
+                                 PointSet>,
+          Model_::StateDim, PointSet> {
   static_assert(checkModel<Model_, 1>());
-  using Engine = detail::UnscentedEngine<DualUkf<Model_, Integrator_>, Model_, Integrator_, DualUkfSettingsFor<Model_>,
-                                         Model_::StateDim>;
+  using Est = detail::Estimate<typename Model_::Scalar, Model_::StateDim, Model_::MeasDim, PointSet>;
+  using Policy = detail::DualParameters<Model_, Integrator_, DualUkfSettingsFor<Model_>, Est, PointSet>;
+  using Engine = detail::UnscentedEngine<DualUkf, Model_, Integrator_, DualUkfSettingsFor<Model_>, Policy,
+                                         Model_::StateDim, PointSet>;
   friend Engine;
+  friend Policy;
 
  public:
   /// The model's scalar and vector types (see the engine, detail/unscented_engine.hpp).
@@ -93,8 +321,10 @@ class DualUkf : public detail::UnscentedEngine<DualUkf<Model_, Integrator_>, Mod
   using Settings = DualUkfSettingsFor<Model_>;
   /// n, p and m: the model's sizes.
   using Engine::StateDim, Engine::ParamDim, Engine::MeasDim;
-  static constexpr int SigmaPointCount = 2 * StateDim + 1;           ///< of the state filter
-  static constexpr int ParameterSigmaPointCount = 2 * ParamDim + 1;  ///< of the parameter filter
+  /// The number of sigma points of the state filter.
+  using Engine::SigmaPointCount;
+  /// The number of sigma points of the parameter filter.
+  static constexpr int ParameterSigmaPointCount = Policy::ParameterCount;
   /// An n × n matrix: the state filter's covariance.
   using StateMatrix = Eigen::Matrix<Scalar, StateDim, StateDim>;
   /// A p × p matrix: the parameter filter's covariance.
@@ -124,19 +354,19 @@ class DualUkf : public detail::UnscentedEngine<DualUkf<Model_, Integrator_>, Mod
     if (!(settings.parameterForgetting > 0 && settings.parameterForgetting <= 1))
       return detail::invalid(kOwner, "parameterForgetting", "must lie in (0, 1]");
     if (SettingsError e = Engine::validateSettings(kOwner, settings)) return e;
-    return ParameterCore::SigmaPoints::validate(settings.parameterSigmaPoints);
+    return Policy::ParameterEstimate::SigmaPoints::validate(settings.parameterSigmaPoints);
   }
 
   /// The state estimate x̂.
-  const State& state() const { return this->core_.mean(); }
+  const State& state() const { return this->estimate_.mean(); }
   /// The state filter's covariance P (n × n).
-  const StateMatrix& covariance() const { return this->core_.covariance(); }
+  const StateMatrix& covariance() const { return this->estimate_.covariance(); }
   /// θ̂, the parameter filter's mean.
-  const Param& parameters() const { return parameterCore_.mean(); }
+  const Param& parameters() const { return this->policy_.estimate().mean(); }
   /// P^θ, the parameter filter's covariance.
-  const ParamMatrix& parameterCovariance() const { return parameterCore_.covariance(); }
+  const ParamMatrix& parameterCovariance() const { return this->policy_.estimate().covariance(); }
   /// Innovation, its covariance and NIS of the parameter filter's last successful correction.
-  const UpdateDiagnostics<Scalar, MeasDim>& lastParameterUpdate() const { return parameterCore_.diagnostics(); }
+  const UpdateDiagnostics<Scalar, MeasDim>& lastParameterUpdate() const { return this->policy_.estimate().diagnostics(); }
 
   /// Starts the state filter again from (state, covariance), keeping the parameter filter. When one is
   /// not finite or the covariance is not symmetric positive definite, it changes nothing and throws
@@ -159,197 +389,16 @@ class DualUkf : public detail::UnscentedEngine<DualUkf<Model_, Integrator_>, Mod
     if (SettingsError e = detail::requireCommittableCovariance(kOwner, "parameterCovariance", parameterCovariance))
       return detail::report(e);
     this->resetEstimate(state, covariance);
-    parameterCore_.assign(parameters, parameterCovariance);  // checked above
-    hasPrior_ = false;
+    this->policy_.reset(parameters, parameterCovariance);  // checked above
     return ResetResult();
   }
 
  private:
   static constexpr const char* kOwner = "mjukf::DualUkf";
-  using ParameterCore = detail::UnscentedCore<Scalar, ParamDim, MeasDim>;
-  using PropagatedStates = Eigen::Matrix<Scalar, StateDim, ParameterSigmaPointCount>;
-
-  // The time step a measurement update of the UpdatedParameters ordering runs again.
-  struct Step {
-    Scalar t = 0, h = 0;
-    int steps = 0;
-    bool fromSignal = false;  // the model's u(t), or `held`
-    Input held = Input::Zero();
-  };
 
   DualUkf(detail::Validated, const Model_& model, const State& initialState, const Param& initialParameters,
           const Settings& settings, const Integrator_& integrator)
-      : Engine(detail::Validated{}, model, integrator, settings, initialState),
-        parameterCore_(detail::Validated{}, settings.parameterSigmaPoints),
-        parameterNoise_(settings.measurementNoise + settings.parameterObservationNoise),
-        boundsActive_(settings.parameterBounds.active()) {
-    parameterCore_.assign(initialParameters, settings.initialParameterCovariance);  // checked in validate()
-  }
-
-  // The parameters the state filter runs with: θ̂⁻, or θ̂_k while the UpdatedParameters ordering
-  // predicts and corrects the state again.
-  const Param& stateFilterParameters() const {
-    return useCorrectedParameters_ ? parameterCore_.candidateMean() : parameterCore_.mean();
-  }
-
-  // ---- Engine hooks --------------------------------------------------------------------------------
-
-  // χᵢ⁺ = Φ_h(χᵢ; t, θ̂)
-  template <class InputSource>
-  void propagatePoints(const InputSource& input, Scalar t, Scalar h, int steps, typename Engine::Points& points) {
-    const Param& theta = stateFilterParameters();
-    for (int i = 0; i < SigmaPointCount; ++i)
-      points.col(i) = detail::propagate(this->model_, this->integrator_, input, theta, t, h, steps, points.col(i));
-  }
-  // Yᵢ = g(χᵢ⁺, θ̂)
-  void measurePoints(const typename Engine::Points& points, typename Engine::MeasPoints& measured) {
-    const Param& theta = stateFilterParameters();
-    for (int i = 0; i < SigmaPointCount; ++i) measured.col(i) = this->model_.measurement(points.col(i), theta);
-  }
-  template <class InputSource>
-  State propagateOpenLoop(const InputSource& input, Scalar t, Scalar h, int steps) {
-    return detail::propagate(this->model_, this->integrator_, input, parameters(), t, h, steps, state());
-  }
-  void commitOpenLoop() {
-    parameterCore_.commitMean(parameterCore_.mean());  // its θⱼ were propagated from an x̂ that moved on
-    hasPrior_ = false;
-  }
-
-  // The parameter time update, θ̂⁻ = θ̂, P^θ⁻ = P^θ / λ + Q_θ, and the propagation of x̂_{k−1} with each
-  // θⱼ of (θ̂⁻, P^θ⁻) over the step, into the candidates.
-  template <class InputSource>
-  Status predictParameters(const InputSource& input, Scalar t, Scalar h, int steps) {
-    const Settings& s = this->settings_;
-    ParameterCore& pc = parameterCore_;
-    pc.candidateMean() = pc.mean();
-    pc.candidateCovariance() = pc.covariance() / s.parameterForgetting + s.parameterProcessNoise;
-    const Status settled = pc.settle(s.repair);
-    if (!taken(settled)) return settled;
-    if (const Status drawn = pc.drawFrom(pc.candidateMean(), pc.candidateFactor()); drawn != Status::Ok) return drawn;
-    for (int j = 0; j < ParameterSigmaPointCount; ++j) {
-      const Param theta = pc.workPoints().col(j);
-      candidatePropagatedStates_.col(j) =
-          detail::propagate(this->model_, this->integrator_, input, theta, t, h, steps, state());
-    }
-    if (!detail::allFinite(candidatePropagatedStates_)) return Status::NonFiniteResult;
-    if (this->settings_.ordering == DualUkfOrdering::UpdatedParameters) {
-      candidatePriorMean_ = state();
-      candidatePriorFactor_ = this->core_.factor();
-      candidateStep_.t = t;
-      candidateStep_.h = h;
-      candidateStep_.steps = steps;
-      candidateStep_.fromSignal = !std::is_same_v<InputSource, detail::HeldInput<Model_>>;
-      if constexpr (std::is_same_v<InputSource, detail::HeldInput<Model_>>) candidateStep_.held = input.value;
-    }
-    return settled;
-  }
-  void commitParameterPrediction() {
-    parameterCore_.commitPrediction();
-    propagatedStates_ = candidatePropagatedStates_;
-    if (this->settings_.ordering == DualUkfOrdering::UpdatedParameters) {
-      priorMean_ = candidatePriorMean_;
-      priorFactor_ = candidatePriorFactor_;
-      step_ = candidateStep_;
-      hasPrior_ = true;
-    }
-  }
-  void commitParameterCorrection() {
-    parameterCore_.commitCorrection();
-    hasPrior_ = false;
-  }
-
-  // ---- The measurement update: parameters, then the state ------------------------------------------
-  // The parameter filter is corrected first, into its candidates; the engine's correction of the state
-  // then commits both (commitParameterCorrection) or neither.
-
-  Status update(const Meas& y, const typename Engine::Mask* present) {
-    if (!detail::presentComponentsFinite(y, present)) return Status::NonFiniteMeasurement;
-    const Status parameters = correctParameterFilter(y, present);
-    if (!taken(parameters)) return parameters;
-    Status state;
-    if (this->settings_.ordering == DualUkfOrdering::UpdatedParameters && hasPrior_) {
-      useCorrectedParameters_ = true;
-      state = predictStateAgain();
-      if (taken(state)) {
-        const Status corrected = this->correctAndCommit(redrawnOrPredictedPoints(), repredictedMean_,
-                                                        repredictedCovariance_, y, present);
-        state = taken(corrected) ? detail::combineTaken(corrected, state) : corrected;
-      }
-      useCorrectedParameters_ = false;
-    } else {
-      state = Engine::update(y, present);
-    }
-    return taken(state) ? detail::combineTaken(state, parameters) : state;
-  }
-
-  // §3 for the parameter filter (R + parameterObservationNoise as the observation noise; no gate: the state's gate decides), into
-  // its candidates, with bounds applied; committed with the state's correction.
-  Status correctParameterFilter(const Meas& y, const typename Engine::Mask* present) {
-    ParameterCore& pc = parameterCore_;
-    const bool drawn = !pc.hasPoints();
-    if (drawn)
-      if (const Status s = pc.draw(pc.mean()); s != Status::Ok) return s;
-    const auto& thetas = drawn ? pc.workPoints() : pc.points();
-    for (int j = 0; j < ParameterSigmaPointCount; ++j)  // Dⱼ = g(Φ_h(x̂_{k−1}; θⱼ), θⱼ)
-      pc.measuredPoints().col(j) =
-          this->model_.measurement(drawn ? state() : State(propagatedStates_.col(j)), thetas.col(j));
-    if (const Status s = pc.correct(thetas, pc.mean(), pc.covariance(), y, parameterNoise_, present, noGate_);
-        s != Status::Ok)
-      return s;
-    if (!detail::allFinite(pc.candidateMean())) return Status::NonFiniteResult;
-    const Status settled = pc.settle(this->settings_.repair);
-    if (!taken(settled)) return settled;
-    if (boundsActive_) this->settings_.parameterBounds.clamp(pc.candidateMean());
-    return settled;
-  }
-
-  // The UpdatedParameters ordering: the state's last time update again, from x̂_{k−1} and the factor
-  // of P_{k−1}, with θ̂_k, into repredictedMean_/repredictedCovariance_ and the engine's work points.
-  Status predictStateAgain() {
-    auto& core = this->core_;
-    if (const Status s = core.drawFrom(priorMean_, priorFactor_); s != Status::Ok) return s;
-    if constexpr (hasInputSignal<Model_>) {
-      if (step_.fromSignal)
-        propagatePoints(detail::SharedSignalInput<Model_>(this->model_), step_.t, step_.h, step_.steps,
-                        core.workPoints());
-      else
-        propagatePoints(detail::HeldInput<Model_>{step_.held}, step_.t, step_.h, step_.steps, core.workPoints());
-    } else {
-      propagatePoints(detail::HeldInput<Model_>{step_.held}, step_.t, step_.h, step_.steps, core.workPoints());
-    }
-    if (!detail::allFinite(core.workPoints())) return Status::NonFiniteResult;
-    core.predict(this->settings_.processNoise);
-    if (!detail::allFinite(core.candidateMean())) return Status::NonFiniteResult;
-    const Status settled = core.settle(this->settings_.repair);
-    if (!taken(settled)) return settled;
-    repredictedMean_ = core.candidateMean();
-    repredictedCovariance_ = core.candidateCovariance();
-    return settled;
-  }
-  const typename Engine::Points& redrawnOrPredictedPoints() {
-    auto& core = this->core_;
-    if (this->settings_.redrawPointsForUpdate) core.drawFrom(repredictedMean_, core.candidateFactor());
-    return core.workPoints();
-  }
-
-  ParameterCore parameterCore_;  // θ̂, P^θ, the θⱼ
-  typename Settings::MeasMatrix parameterNoise_;  // R + parameterObservationNoise
-  bool boundsActive_;
-  MeasurementGate<Scalar, MeasDim> noGate_;
-  PropagatedStates propagatedStates_ = PropagatedStates::Zero();  // Φ_h(x̂_{k−1}; θⱼ) of the last time update
-  // The UpdatedParameters ordering: the state filter's prior of the last time update and its step.
-  State priorMean_ = State::Zero();
-  StateMatrix priorFactor_ = StateMatrix::Zero();
-  Step step_;
-  bool hasPrior_ = false;
-  bool useCorrectedParameters_ = false;
-  // Workspace, committed only with the step that made it.
-  PropagatedStates candidatePropagatedStates_;
-  State candidatePriorMean_;
-  StateMatrix candidatePriorFactor_;
-  Step candidateStep_;
-  State repredictedMean_;
-  StateMatrix repredictedCovariance_;
+      : Engine(detail::Validated{}, model, integrator, settings, initialState, Policy(settings, initialParameters)) {}
 };
 
 }  // namespace mjukf

@@ -5,7 +5,6 @@
 
 #include <Eigen/Core>
 
-#include "mjukf/detail/propagation.hpp"
 #include "mjukf/detail/unscented_engine.hpp"
 #include "mjukf/detail/validation.hpp"
 #include "mjukf/filter_settings.hpp"
@@ -31,6 +30,66 @@ template <class Model>
 using JointUkfSettingsFor =
     JointUkfSettings<typename Model::Scalar, Model::StateDim, Model::ParamDim, Model::MeasDim>;
 
+namespace detail {
+
+/// The parameter policy of `JointUkf`: θ is the tail of the augmented vector [x; θ], constant in the
+/// model (θ̇ = 0), with optional bounds on the committed mean (detail/unscented_engine.hpp §3 lists what
+/// a policy supplies).
+template <class Model, class Integrator, class Settings, class Est>
+class AugmentedParameters : public ParameterPolicy<Model, Integrator, Settings, Est> {
+ public:
+  using Scalar = typename Model::Scalar;
+  using Param = typename Model::Param;
+  using Vector = typename Est::Vector;
+  static constexpr int StateDim = Model::StateDim, ParamDim = Model::ParamDim;
+
+  explicit AugmentedParameters(const ParameterBounds<Scalar, ParamDim>& bounds)
+      : bounds_(bounds), boundsActive_(bounds.active()) {}
+
+  template <class Step>
+  Status predictParameters(const Step&, const Est&) {
+    return Status::Ok;
+  }
+  // [xᵢ; θᵢ]⁺ = [Φ_h(xᵢ; t, θᵢ); θᵢ]
+  template <class Step>
+  void propagatePoints(const Step& step, typename Est::Points& points) {
+    for (int i = 0; i < Est::Count; ++i) {
+      const Param theta = points.col(i).template tail<ParamDim>();
+      points.col(i).template head<StateDim>() = step.propagate(theta, points.col(i).template head<StateDim>());
+    }
+  }
+  template <class Step>
+  Vector propagateMean(const Step& step, const Vector& z) {
+    Vector next = z;
+    next.template head<StateDim>() = step.propagate(Param(z.template tail<ParamDim>()), z.template head<StateDim>());
+    return next;
+  }
+  // Yᵢ = g(xᵢ, θᵢ) of zᵢ = [xᵢ; θᵢ]
+  void measurePoints(const Model& model, const typename Est::Points& points, typename Est::MeasPoints& measured) {
+    for (int i = 0; i < Est::Count; ++i)
+      measured.col(i) =
+          model.measurement(points.col(i).template head<StateDim>(), points.col(i).template tail<ParamDim>());
+  }
+  template <class Engine>
+  Status update(Engine& engine, const typename Model::Meas& y, const typename Est::Mask* present) {
+    return engine.correctState(y, present);
+  }
+  Status correctParameters(const Correction<Model, Settings, Est>&) { return Status::Ok; }
+  // The θ block of every committed mean within the bounds (parameter_bounds.hpp).
+  void constrainMean(Vector& z) {
+    if (boundsActive_) bounds_.clamp(z.template tail<ParamDim>());
+  }
+  void commitPrediction() {}
+  void commitCorrection() {}
+  void commitOpenLoop(Scalar) {}
+
+ private:
+  ParameterBounds<Scalar, ParamDim> bounds_;
+  bool boundsActive_;
+};
+
+}  // namespace detail
+
 /// Joint unscented Kalman filter: estimates z = [x; θ] with L = n + p, the parameters constant in the
 /// model (θ̇ = 0). A time update costs 2(n + p) + 1 model propagations.
 ///
@@ -41,13 +100,22 @@ using JointUkfSettingsFor =
 ///
 /// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
 /// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
-template <class Model_, class Integrator_ = DefaultIntegrator<Model_>>
-class JointUkf : public detail::UnscentedEngine<JointUkf<Model_, Integrator_>, Model_, Integrator_,
-                                                JointUkfSettingsFor<Model_>, Model_::StateDim + Model_::ParamDim> {
+template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled>
+class JointUkf
+    : public detail::UnscentedEngine<
+          JointUkf<Model_, Integrator_, PointSet>, Model_, Integrator_, JointUkfSettingsFor<Model_>,
+          detail::AugmentedParameters<Model_, Integrator_, JointUkfSettingsFor<Model_>,
+                                      detail::Estimate<typename Model_::Scalar, Model_::StateDim + Model_::ParamDim,
+                                                       Model_::MeasDim, PointSet>>,
+          Model_::StateDim + Model_::ParamDim, PointSet> {
   static_assert(checkModel<Model_, 1>());
-  using Engine = detail::UnscentedEngine<JointUkf<Model_, Integrator_>, Model_, Integrator_, JointUkfSettingsFor<Model_>,
-                                         Model_::StateDim + Model_::ParamDim>;
+  using Est =
+      detail::Estimate<typename Model_::Scalar, Model_::StateDim + Model_::ParamDim, Model_::MeasDim, PointSet>;
+  using Policy = detail::AugmentedParameters<Model_, Integrator_, JointUkfSettingsFor<Model_>, Est>;
+  using Engine = detail::UnscentedEngine<JointUkf, Model_, Integrator_, JointUkfSettingsFor<Model_>, Policy,
+                                         Model_::StateDim + Model_::ParamDim, PointSet>;
   friend Engine;
+  friend Policy;
 
  public:
   /// The model's scalar and vector types (see the engine, detail/unscented_engine.hpp).
@@ -58,8 +126,8 @@ class JointUkf : public detail::UnscentedEngine<JointUkf<Model_, Integrator_>, M
   using Engine::StateDim, Engine::ParamDim;
   /// n + p, the dimension of the augmented vector [x; θ].
   static constexpr int AugmentedDim = StateDim + ParamDim;
-  /// 2(n + p) + 1 sigma points.
-  static constexpr int SigmaPointCount = 2 * AugmentedDim + 1;
+  /// The number of sigma points: 2(n + p) + 1 (van der Merwe's set, the default) or 2(n + p) (cubature).
+  using Engine::SigmaPointCount;
   /// The augmented vector [x; θ].
   using AugmentedState = Eigen::Matrix<Scalar, AugmentedDim, 1>;
   /// The covariance of [x; θ].
@@ -85,9 +153,9 @@ class JointUkf : public detail::UnscentedEngine<JointUkf<Model_, Integrator_>, M
   /// The parameter block θ of the augmented mean.
   Param parameters() const { return augmentedState().template tail<ParamDim>(); }
   /// The augmented mean [x̂; θ̂].
-  const AugmentedState& augmentedState() const { return this->core_.mean(); }
+  const AugmentedState& augmentedState() const { return this->estimate_.mean(); }
   /// Covariance of the augmented vector [x; θ].
-  const AugmentedMatrix& covariance() const { return this->core_.covariance(); }
+  const AugmentedMatrix& covariance() const { return this->estimate_.covariance(); }
 
   /// Starts again from the state, the augmented covariance of [x; θ] and the current parameters.
   /// When one is not finite, the covariance is not symmetric positive definite, or the parameters lie
@@ -111,8 +179,8 @@ class JointUkf : public detail::UnscentedEngine<JointUkf<Model_, Integrator_>, M
 
   JointUkf(detail::Validated, const Model_& model, const State& initialState, const Param& initialParameters,
            const Settings& settings, const Integrator_& integrator)
-      : Engine(detail::Validated{}, model, integrator, settings, augment(initialState, initialParameters)),
-        boundsActive_(settings.parameterBounds.active()) {}
+      : Engine(detail::Validated{}, model, integrator, settings, augment(initialState, initialParameters),
+               Policy(settings.parameterBounds)) {}
 
   // [x; θ]
   static AugmentedState augment(const State& x, const Param& theta) {
@@ -121,34 +189,6 @@ class JointUkf : public detail::UnscentedEngine<JointUkf<Model_, Integrator_>, M
     z.template tail<ParamDim>() = theta;
     return z;
   }
-
-  // [xᵢ; θᵢ]⁺ = [Φ_h(xᵢ; t, θᵢ); θᵢ]
-  template <class InputSource>
-  void propagatePoints(const InputSource& input, Scalar t, Scalar h, int steps, typename Engine::Points& points) {
-    for (int i = 0; i < SigmaPointCount; ++i) {
-      const Param theta = points.col(i).template tail<ParamDim>();
-      points.col(i).template head<StateDim>() = detail::propagate(this->model_, this->integrator_, input, theta, t, h,
-                                                                  steps, points.col(i).template head<StateDim>());
-    }
-  }
-  // Yᵢ = g(xᵢ, θᵢ) of zᵢ = [xᵢ; θᵢ]
-  void measurePoints(const typename Engine::Points& points, typename Engine::MeasPoints& measured) {
-    for (int i = 0; i < SigmaPointCount; ++i)
-      measured.col(i) =
-          this->model_.measurement(points.col(i).template head<StateDim>(), points.col(i).template tail<ParamDim>());
-  }
-  template <class InputSource>
-  AugmentedState propagateOpenLoop(const InputSource& input, Scalar t, Scalar h, int steps) {
-    AugmentedState z = augmentedState();
-    z.template head<StateDim>() =
-        detail::propagate(this->model_, this->integrator_, input, parameters(), t, h, steps, state());
-    return z;
-  }
-  void constrainMean(AugmentedState& z) {
-    if (boundsActive_) this->settings_.parameterBounds.clamp(z.template tail<ParamDim>());
-  }
-
-  bool boundsActive_;
 };
 
 }  // namespace mjukf

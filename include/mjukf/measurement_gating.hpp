@@ -8,7 +8,6 @@
 
 #include <Eigen/Core>
 
-#include "mjukf/detail/finite.hpp"
 #include "mjukf/detail/validation.hpp"
 
 namespace mjukf {
@@ -74,15 +73,6 @@ SettingsError validateGate(const char* owner, const MeasurementGate<Scalar, Meas
   if (!(gate.nisThreshold.array() > Scalar(0)).all())
     return invalid(owner, "gate.nisThreshold", "must be positive (+infinity turns the gate off)");
   return {};
-}
-
-// True when every present component of y is finite.
-template <class Meas, class Mask>
-bool presentComponentsFinite(const Meas& y, const Mask* present) {
-  if (!present) return detail::allFinite(y);
-  for (int j = 0; j < y.size(); ++j)
-    if ((*present)(j) && !std::isfinite(y(j))) return false;
-  return true;
 }
 
 }  // namespace detail

@@ -36,6 +36,9 @@
 /// time update over `steps` steps of h applies `transition` `steps` times, at t, t + h, ….
 ///
 /// Physical constants are ordinary data members, so the same model can be built with other constants.
+///
+/// `stepModel` below says what one step of a model is (an integrator step, or the transition): the
+/// filters, `simulate` (simulation.hpp) and the programs take every step of a model through it.
 
 #include <type_traits>
 #include <utility>
@@ -154,6 +157,56 @@ constexpr bool checkModel() {
   static_assert(detail::HasMeasurement<Model>::value,
                 "Model needs `Meas measurement(const State&, const Param&) const`");
   return true;
+}
+
+
+/// \cond INTERNAL
+namespace detail {
+
+// An input source as stepModel takes it, made callable: a held value (any expression convertible to
+// Model::Input is evaluated once), or the caller's callable t -> Input as it is.
+template <class Model, class Inputs>
+auto inputSource(const Inputs& inputs) {
+  using Input = typename Model::Input;
+  using Scalar = typename Model::Scalar;
+  if constexpr (std::is_convertible_v<const Inputs&, Input>) {
+    return [u = Input(inputs)](Scalar) -> const Input& { return u; };
+  } else {
+    static_assert(std::is_invocable_r_v<Input, const Inputs&, Scalar>,
+                  "the input must be a Model::Input (held over the step) or a callable Scalar t -> Model::Input");
+    return [&inputs](Scalar t) -> decltype(auto) { return inputs(t); };
+  }
+}
+
+}  // namespace detail
+/// \endcond
+
+/// One integrator step of size h of `model` from the state x at time t under the parameters θ:
+/// x⁺ = Φ_h(x; t, θ), with ẋ = f(t, x, u(t), θ) = model.derivative(t, x, u, θ); for a discrete-time
+/// model (model.hpp), x⁺ = model.transition(t, h, x, u(t), θ), and the integrator is not used.
+///
+/// `inputs` gives u: either a `Model::Input` (or an expression convertible to it), held constant over
+/// the step (zero-order hold, as `timeUpdate(t, h, u)` does), or a callable `Scalar t -> Model::Input`,
+/// evaluated at every stage time the integrator asks for (as `timeUpdate(t, h)` does with the model's
+/// own `input(t)`).
+///
+/// `simulate`, and the simulations of the tests, examples and benchmarks, take every step of a model
+/// through this function: it is the one place that says what one step of the plant is.
+template <class Model, class Integrator, class Inputs>
+typename Model::State stepModel(const Model& model, const Integrator& integrator, typename Model::Scalar t,
+                                typename Model::Scalar h, const typename Model::State& x, const Inputs& inputs,
+                                const typename Model::Param& theta) {
+  static_assert(checkModel<Model>());
+  using Scalar = typename Model::Scalar;
+  using State = typename Model::State;
+  const auto input = detail::inputSource<Model>(inputs);
+  if constexpr (isDiscreteTime<Model>) {
+    static_cast<void>(integrator);
+    return model.transition(t, h, x, input(t), theta);  // the input at the start of the step
+  } else {
+    const auto rhs = [&](Scalar time, const State& z) -> State { return model.derivative(time, z, input(time), theta); };
+    return integrator.step(rhs, t, x, h);
+  }
 }
 
 }  // namespace mjukf

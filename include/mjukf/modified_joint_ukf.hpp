@@ -9,8 +9,6 @@
 
 #include <Eigen/Core>
 
-#include "mjukf/detail/finite.hpp"
-#include "mjukf/detail/propagation.hpp"
 #include "mjukf/detail/unscented_engine.hpp"
 #include "mjukf/detail/validation.hpp"
 #include "mjukf/filter_settings.hpp"
@@ -67,6 +65,188 @@ template <class Model>
 using ModifiedJointUkfSettingsFor =
     ModifiedJointUkfSettings<typename Model::Scalar, Model::StateDim, Model::ParamDim, Model::MeasDim>;
 
+namespace detail {
+
+/// The parameter policy of `ModifiedJointUkf` (docs/algorithms.md §5): every sigma point χᵢ carries its
+/// own θᵢ (eq. 8), is propagated and measured with it, and the θᵢ move against their point's
+/// measurement error (eq. 9); θ̂ is their mean (eq. 10). With the automatic modes, T and a ξ per
+/// parameter come from the sensitivities (parameter_sensitivity.hpp). detail/unscented_engine.hpp §3
+/// lists what a policy supplies.
+template <class Model, class Integrator, class Settings, class Est>
+class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settings, Est> {
+ public:
+  using Scalar = typename Model::Scalar;
+  using State = typename Model::State;
+  using Param = typename Model::Param;
+  using Meas = typename Model::Meas;
+  using Vector = typename Est::Vector;
+  static constexpr int StateDim = Model::StateDim, ParamDim = Model::ParamDim, MeasDim = Model::MeasDim;
+  static constexpr int Count = Est::Count;
+  static_assert(Count == 2 * StateDim + 1,
+                "ModifiedJointUkf needs van der Merwe's 2n + 1 sigma points: eqs. 8-10 pair each with its own "
+                "theta_i (the cubature set has 2n)");
+  using Transformation = Eigen::Matrix<Scalar, ParamDim, MeasDim>;
+  using ParamPoints = Eigen::Matrix<Scalar, ParamDim, Count>;
+  using Sensitivity = ParameterSensitivity<Scalar, StateDim, MeasDim, ParamDim>;
+
+  ModifiedJointParameters(const Settings& settings, const Param& initialParameters)
+      : automatic_(settings.automaticTransformation || settings.adaptiveScaling),
+        boundsActive_(settings.parameterBounds.active()) {
+    spread(settings, initialParameters);
+  }
+
+  const Param& parameters() const { return parameters_; }
+  const ParamPoints& parameterPoints() const { return parameterPoints_; }
+  const Transformation& lastTransformation() const { return transformation_; }
+  const Param& lastScalings() const { return scalings_; }
+  const Sensitivity& sensitivity() const { return sensitivity_; }
+
+  // Eq. 8: θᵢ = θ̂₀ − p_θ (n + 1) + p_θ (i + 1), i = 0 … 2n; their mean is θ̂₀. The automatic modes
+  // start knowing each parameter to about the larger of its size and the half-width of the θᵢ.
+  void spread(const Settings& s, const Param& center) {
+    Param scale = center.cwiseAbs().cwiseMax(s.parameterSpread.cwiseAbs() * Scalar(StateDim + 1));
+    for (int r = 0; r < ParamDim; ++r)
+      if (!(scale(r) > Scalar(0))) scale(r) = Scalar(1);
+    sensitivity_.start(scale, s.measurementNoise);
+    timeUpdates_ = 0;
+    transformation_.setZero();
+    scalings_.setZero();
+    parameters_ = center;
+    for (int i = 0; i < Count; ++i)
+      parameterPoints_.col(i) = center - s.parameterSpread * Scalar(StateDim + 1) + s.parameterSpread * Scalar(i + 1);
+    if (boundsActive_)
+      for (int i = 0; i < Count; ++i) s.parameterBounds.clamp(parameterPoints_.col(i));
+  }
+  // A new state estimate that does not depend on θ̂ (reset of the state alone): W = 0.
+  void restartState() { sensitivity_.restartState(); }
+
+  template <class Step>
+  Status predictParameters(const Step&, const Est&) {
+    return Status::Ok;
+  }
+  // χᵢ⁺ = Φ_h(χᵢ; t, θᵢ), each point with its own θᵢ. The automatic modes then follow W = ∂x̂/∂θ̂
+  // about point 0 (χ₀ = x̂ with θ₀), whose propagation is the nominal of the forward differences.
+  template <class Step>
+  void propagatePoints(const Step& step, typename Est::Points& points) {
+    const State x0 = points.col(0);
+    for (int i = 0; i < Count; ++i) {
+      const Param theta = parameterPoints_.col(i);
+      points.col(i) = step.propagate(theta, points.col(i));
+    }
+    if (!automatic_) return;
+    const int every = step.settings.sensitivityInterval;
+    const bool refreshDue = every == 0 ? timeUpdates_ == 0 : timeUpdates_ % every == 0;
+    if (!refreshDue) return sensitivity_.keepPrediction(step.interval());
+    sensitivity_.predict(x0, parameterPoints_.col(0), points.col(0), step.interval(),
+                         [&](const State& x, const Param& theta) { return step.propagate(theta, x); });
+  }
+  template <class Step>
+  Vector propagateMean(const Step& step, const Vector& mean) {
+    return step.propagate(parameters_, mean);
+  }
+  // Yᵢ = g(χᵢ⁺, θᵢ); points drawn afresh are paired with the θᵢ in order.
+  void measurePoints(const Model& model, const typename Est::Points& points, typename Est::MeasPoints& measured) {
+    for (int i = 0; i < Count; ++i) measured.col(i) = model.measurement(points.col(i), parameterPoints_.col(i));
+  }
+  template <class Engine>
+  Status update(Engine& engine, const Meas& y, const typename Est::Mask* present) {
+    return engine.correctState(y, present);
+  }
+
+  // Eqs. 9–10 into the candidates, from the Yᵢ of the state's correction:
+  //   θᵢ ← θ̂ − ξ T (y − Yᵢ),   θ̂ ← (1 / (2n + 1)) Σ θᵢ,
+  // with one ξ (the paper) or, in the automatic modes, T and one ξ per parameter from the sensitivities.
+  Status correctParameters(const Correction<Model, Settings, Est>& c) {
+    const Settings& s = c.settings;
+    if (automatic_) {
+      const Scalar memory = s.adaptiveScaling ? s.convergenceTime : std::numeric_limits<Scalar>::infinity();
+      const auto measure = [&c](const State& x, const Param& theta) { return c.model.measurement(x, theta); };
+      if (!sensitivity_.correct(c.priorMean, parameters_, measure, c.gainFactor, c.innovationFactor, memory,
+                                c.present))
+        return Status::NonFiniteResult;
+    }
+    if (s.automaticTransformation)
+      sensitivity_.transformation(candidateTransformation_);
+    else
+      candidateTransformation_ = s.transformation;
+    if (c.present && !s.automaticTransformation) reduceToPresent(*c.present);
+    if (s.adaptiveScaling)
+      sensitivity_.scaling(candidateTransformation_, c.innovationFactor, candidateScalings_);
+    else
+      candidateScalings_.setConstant(s.scaling);
+
+    for (int i = 0; i < Count; ++i) {  // y − Yᵢ; a missing y(j) may be NaN: overwrite, never multiply by 0
+      errors_.col(i) = c.y - c.measured.col(i);
+      if (c.present)
+        for (int j = 0; j < MeasDim; ++j)
+          if (!(*c.present)(j)) errors_(j, i) = Scalar(0);
+    }
+    // Eq. 9 for every point at once, ξ T (y − Yᵢ): the paper's one ξ scales T, the automatic ones scale
+    // each parameter's row of T (y − Yᵢ).
+    if (s.adaptiveScaling)
+      steps_.noalias() = candidateScalings_.asDiagonal() * candidateTransformation_.lazyProduct(errors_);
+    else
+      steps_.noalias() = (s.scaling * candidateTransformation_).lazyProduct(errors_);
+    for (int i = 0; i < Count; ++i) {
+      candidateParameterPoints_.col(i) = parameters_ - steps_.col(i);
+      if (boundsActive_) s.parameterBounds.clamp(candidateParameterPoints_.col(i));
+    }
+    candidateParameters_ = candidateParameterPoints_.rowwise().sum() / Scalar(Count);  // eq. 10
+    if (!allFinite(candidateParameterPoints_) || !allFinite(candidateParameters_)) return Status::NonFiniteResult;
+    return Status::Ok;
+  }
+  void constrainMean(Vector&) {}
+
+  void commitPrediction() {
+    if (!automatic_) return;
+    sensitivity_.commitPrediction();
+    ++timeUpdates_;
+  }
+  void commitCorrection() {
+    parameters_ = candidateParameters_;
+    parameterPoints_ = candidateParameterPoints_;
+    if (!automatic_) return;
+    sensitivity_.commitCorrection();
+    transformation_ = candidateTransformation_;
+    scalings_ = candidateScalings_;
+  }
+  void commitOpenLoop(Scalar interval) {
+    if (automatic_) sensitivity_.commitOpenLoop(interval);
+  }
+
+ private:
+  // T with the columns of missing components zeroed and each row rescaled to sum to 1 (eq. 14).
+  void reduceToPresent(const MeasurementMask<MeasDim>& present) {
+    const Transformation t = candidateTransformation_;
+    for (int r = 0; r < ParamDim; ++r) {
+      Scalar sum = 0;
+      for (int j = 0; j < MeasDim; ++j)
+        if (present(j)) sum += t(r, j);
+      for (int j = 0; j < MeasDim; ++j)
+        candidateTransformation_(r, j) = present(j) && sum != Scalar(0) ? t(r, j) / sum : Scalar(0);
+    }
+  }
+
+  bool automatic_;
+  bool boundsActive_;
+  Param parameters_ = Param::Zero();             // θ̂
+  ParamPoints parameterPoints_ = ParamPoints::Zero();  // θᵢ
+  // Workspace of the parameter correction, committed with the state's.
+  Param candidateParameters_ = Param::Zero();
+  ParamPoints candidateParameterPoints_ = ParamPoints::Zero();
+  Eigen::Matrix<Scalar, MeasDim, Count> errors_ = Eigen::Matrix<Scalar, MeasDim, Count>::Zero();  // y − Yᵢ
+  ParamPoints steps_ = ParamPoints::Zero();                                                       // ξ T (y − Yᵢ)
+  // The automatic modes (committed with the parameters).
+  Sensitivity sensitivity_;
+  long timeUpdates_ = 0;
+  Transformation transformation_ = Transformation::Zero();
+  Param scalings_ = Param::Zero();
+  Transformation candidateTransformation_ = Transformation::Zero();
+  Param candidateScalings_ = Param::Zero();
+};
+
+}  // namespace detail
+
 /// Modified joint unscented Kalman filter. Sigma points are drawn for the state alone (L = n, 2n + 1
 /// points); point i is propagated with its own parameter vector θᵢ, and the θᵢ are moved against the
 /// measurement error of their point: a time update costs 2n + 1 model propagations instead of
@@ -88,14 +268,21 @@ using ModifiedJointUkfSettingsFor =
 ///
 /// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
 /// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
-template <class Model_, class Integrator_ = DefaultIntegrator<Model_>>
+template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled>
 class ModifiedJointUkf
-    : public detail::UnscentedEngine<ModifiedJointUkf<Model_, Integrator_>, Model_, Integrator_,
-                                     ModifiedJointUkfSettingsFor<Model_>, Model_::StateDim> {
+    : public detail::UnscentedEngine<
+          ModifiedJointUkf<Model_, Integrator_, PointSet>, Model_, Integrator_, ModifiedJointUkfSettingsFor<Model_>,
+          detail::ModifiedJointParameters<
+              Model_, Integrator_, ModifiedJointUkfSettingsFor<Model_>,
+              detail::Estimate<typename Model_::Scalar, Model_::StateDim, Model_::MeasDim, PointSet>>,
+          Model_::StateDim, PointSet> {
   static_assert(checkModel<Model_, 1>());
-  using Engine = detail::UnscentedEngine<ModifiedJointUkf<Model_, Integrator_>, Model_, Integrator_,
-                                         ModifiedJointUkfSettingsFor<Model_>, Model_::StateDim>;
+  using Est = detail::Estimate<typename Model_::Scalar, Model_::StateDim, Model_::MeasDim, PointSet>;
+  using Policy = detail::ModifiedJointParameters<Model_, Integrator_, ModifiedJointUkfSettingsFor<Model_>, Est>;
+  using Engine = detail::UnscentedEngine<ModifiedJointUkf, Model_, Integrator_, ModifiedJointUkfSettingsFor<Model_>,
+                                         Policy, Model_::StateDim, PointSet>;
   friend Engine;
+  friend Policy;
 
  public:
   /// The model's scalar and vector types (see the engine, detail/unscented_engine.hpp).
@@ -105,7 +292,7 @@ class ModifiedJointUkf
   /// n, p and m: the model's sizes.
   using Engine::StateDim, Engine::ParamDim, Engine::MeasDim;
   /// 2n + 1 sigma points, each with its own parameter vector θᵢ.
-  static constexpr int SigmaPointCount = 2 * StateDim + 1;
+  using Engine::SigmaPointCount;
   /// An n × n matrix: the state covariance.
   using StateMatrix = Eigen::Matrix<Scalar, StateDim, StateDim>;
   /// T of eq. 9 (p × m).
@@ -145,26 +332,27 @@ class ModifiedJointUkf
   }
 
   /// The state estimate x̂.
-  const State& state() const { return this->core_.mean(); }
+  const State& state() const { return this->estimate_.mean(); }
   /// The state covariance P (n × n).
-  const StateMatrix& covariance() const { return this->core_.covariance(); }
+  const StateMatrix& covariance() const { return this->estimate_.covariance(); }
   /// θ̂, the plain mean of the per-point parameters (eq. 10).
-  const Param& parameters() const { return parameters_; }
+  const Param& parameters() const { return this->policy_.parameters(); }
   /// The θᵢ, one column per sigma point, in the order of the sigma points.
-  const ParamPoints& parameterPoints() const { return parameterPoints_; }
+  const ParamPoints& parameterPoints() const { return this->policy_.parameterPoints(); }
   /// T of the last measurement update (with `automaticTransformation`, from the sensitivities; zero
   /// before the first update), else the setting.
   const Transformation& transformation() const {
-    return this->settings_.automaticTransformation ? transformation_ : this->settings_.transformation;
+    return this->settings_.automaticTransformation ? this->policy_.lastTransformation()
+                                                   : this->settings_.transformation;
   }
   /// ξ of the last measurement update, per parameter (with `adaptiveScaling`; zero before the first
   /// update), else the setting for every parameter.
   Param scalings() const {
-    return this->settings_.adaptiveScaling ? scalings_ : Param::Constant(this->settings_.scaling);
+    return this->settings_.adaptiveScaling ? this->policy_.lastScalings() : Param::Constant(this->settings_.scaling);
   }
   /// What the automatic modes know (W = ∂x̂/∂θ̂, ψ = ∂ŷ/∂θ̂ of the last update, the information about
   /// θ); not followed, and zero, when neither mode is on.
-  const Sensitivity& sensitivity() const { return sensitivity_; }
+  const Sensitivity& sensitivity() const { return this->policy_.sensitivity(); }
 
   /// Starts again from (state, covariance), keeping θ̂ and the θᵢ (and, in the automatic modes, the
   /// information about θ; the new state does not depend on θ̂, W = 0). When one is not finite or the
@@ -175,7 +363,7 @@ class ModifiedJointUkf
     if (SettingsError e = detail::requireFinite(kOwner, "state", state)) return detail::report(e);
     if (SettingsError e = Engine::checkResetCovariance(kOwner, covariance)) return detail::report(e);
     this->resetEstimate(state, covariance);
-    sensitivity_.restartState();
+    this->policy_.restartState();
     return ResetResult();
   }
   /// Starts again from (state, covariance) and θ̂ = `parameters`, the θᵢ spread around it by eq. 8 and
@@ -187,7 +375,7 @@ class ModifiedJointUkf
       return detail::report(e);
     if (SettingsError e = Engine::checkResetCovariance(kOwner, covariance)) return detail::report(e);
     this->resetEstimate(state, covariance);
-    spreadParameters(parameters);
+    this->policy_.spread(this->settings_, parameters);
     return ResetResult();
   }
 
@@ -196,162 +384,7 @@ class ModifiedJointUkf
 
   ModifiedJointUkf(detail::Validated, const Model_& model, const State& initialState, const Param& initialParameters,
                    const Settings& settings, const Integrator_& integrator)
-      : Engine(detail::Validated{}, model, integrator, settings, initialState),
-        boundsActive_(settings.parameterBounds.active()) {
-    spreadParameters(initialParameters);
-  }
-
-  // Eq. 8: θᵢ = θ̂₀ − p_θ (n + 1) + p_θ (i + 1), i = 0 … 2n; their mean is θ̂₀. The automatic modes
-  // start knowing each parameter to about the larger of its size and the half-width of the θᵢ.
-  void spreadParameters(const Param& center) {
-    const Settings& s = this->settings_;
-    Param scale = center.cwiseAbs().cwiseMax(s.parameterSpread.cwiseAbs() * Scalar(StateDim + 1));
-    for (int r = 0; r < ParamDim; ++r)
-      if (!(scale(r) > Scalar(0))) scale(r) = Scalar(1);
-    sensitivity_.start(scale, s.measurementNoise);
-    timeUpdates_ = 0;
-    transformation_.setZero();
-    scalings_.setZero();
-    parameters_ = center;
-    for (int i = 0; i < SigmaPointCount; ++i)
-      parameterPoints_.col(i) = center - s.parameterSpread * Scalar(StateDim + 1) + s.parameterSpread * Scalar(i + 1);
-    if (boundsActive_)
-      for (int i = 0; i < SigmaPointCount; ++i) s.parameterBounds.clamp(parameterPoints_.col(i));
-  }
-
-  bool automatic() const { return this->settings_.automaticTransformation || this->settings_.adaptiveScaling; }
-  bool refreshDue() const {
-    const int every = this->settings_.sensitivityInterval;
-    return every == 0 ? timeUpdates_ == 0 : timeUpdates_ % every == 0;
-  }
-
-  // χᵢ⁺ = Φ_h(χᵢ; t, θᵢ), each point with its own θᵢ. The automatic modes then follow W = ∂x̂/∂θ̂
-  // about point 0 (χ₀ = x̂ with θ₀), whose propagation is the nominal of the forward differences.
-  template <class InputSource>
-  void propagatePoints(const InputSource& input, Scalar t, Scalar h, int steps, typename Engine::Points& points) {
-    const State x0 = points.col(0);
-    for (int i = 0; i < SigmaPointCount; ++i) {
-      const Param theta = parameterPoints_.col(i);
-      points.col(i) = detail::propagate(this->model_, this->integrator_, input, theta, t, h, steps, points.col(i));
-    }
-    if (!automatic()) return;
-    const Scalar interval = h * Scalar(steps);
-    if (!refreshDue()) return sensitivity_.keepPrediction(interval);
-    sensitivity_.predict(x0, parameterPoints_.col(0), points.col(0), interval, [&](const State& x, const Param& theta) {
-      return detail::propagate(this->model_, this->integrator_, input, theta, t, h, steps, x);
-    });
-  }
-  void commitParameterPrediction() {
-    if (!automatic()) return;
-    sensitivity_.commitPrediction();
-    ++timeUpdates_;
-  }
-  // Yᵢ = g(χᵢ⁺, θᵢ); points drawn afresh are paired with the θᵢ in order.
-  void measurePoints(const typename Engine::Points& points, typename Engine::MeasPoints& measured) {
-    for (int i = 0; i < SigmaPointCount; ++i)
-      measured.col(i) = this->model_.measurement(points.col(i), parameterPoints_.col(i));
-  }
-  template <class InputSource>
-  State propagateOpenLoop(const InputSource& input, Scalar t, Scalar h, int steps) {
-    openLoopInterval_ = h * Scalar(steps);
-    return detail::propagate(this->model_, this->integrator_, input, parameters_, t, h, steps, state());
-  }
-  void commitOpenLoop() {
-    if (automatic()) sensitivity_.commitOpenLoop(openLoopInterval_);
-  }
-
-  // Eqs. 9–10 into the candidates, from the Yᵢ of the state's correction.
-  Status correctParameters(const Meas& y, const typename Engine::Mask* present) {
-    if (automatic()) return correctParametersAutomatically(y, present);
-    const Settings& s = this->settings_;
-    if (present) reducedTransformation(*present);
-    const Transformation& transformation = present ? maskedTransformation_ : s.transformation;
-    const auto& measured = this->core_.measuredPoints();
-    for (int i = 0; i < SigmaPointCount; ++i) {  // eq. 9
-      measurementError_ = y - measured.col(i);
-      if (present)  // a missing y(j) may be NaN: overwrite, never multiply by a zero column of T
-        for (int j = 0; j < MeasDim; ++j)
-          if (!(*present)(j)) measurementError_(j) = Scalar(0);
-      candidateParameterPoints_.col(i) = parameters_;
-      candidateParameterPoints_.col(i).noalias() -= s.scaling * transformation * measurementError_;
-      if (boundsActive_) s.parameterBounds.clamp(candidateParameterPoints_.col(i));
-    }
-    candidateParameters_ = candidateParameterPoints_.rowwise().sum() / Scalar(SigmaPointCount);  // eq. 10
-    if (!detail::allFinite(candidateParameterPoints_) || !detail::allFinite(candidateParameters_))
-      return Status::NonFiniteResult;
-    return Status::Ok;
-  }
-  void commitParameterCorrection() {
-    parameters_ = candidateParameters_;
-    parameterPoints_ = candidateParameterPoints_;
-    if (!automatic()) return;
-    sensitivity_.commitCorrection();
-    transformation_ = candidateTransformation_;
-    scalings_ = candidateScalings_;
-  }
-
-  // Eqs. 9–10 with T and a per-parameter ξ from the sensitivities (docs/tuning-mjukf.md):
-  // θᵢ ← θ̂ − diag(ξ) T (y − Yᵢ).
-  Status correctParametersAutomatically(const Meas& y, const typename Engine::Mask* present) {
-    const Settings& s = this->settings_;
-    const Scalar memory = s.adaptiveScaling ? s.convergenceTime : std::numeric_limits<Scalar>::infinity();
-    const auto measure = [this](const State& x, const Param& theta) { return this->model_.measurement(x, theta); };
-    if (!sensitivity_.correct(state(), parameters_, measure, this->core_.candidateWhitenedCrossCovariance(),
-                              this->core_.candidateInnovationFactor(), memory, present))
-      return Status::NonFiniteResult;
-    if (s.automaticTransformation) {
-      sensitivity_.transformation(candidateTransformation_);
-    } else {
-      if (present) reducedTransformation(*present);
-      candidateTransformation_ = present ? maskedTransformation_ : s.transformation;
-    }
-    if (s.adaptiveScaling) sensitivity_.scaling(candidateTransformation_, this->core_.candidateInnovationFactor(), candidateScalings_);
-    else candidateScalings_.setConstant(s.scaling);
-    const auto& measured = this->core_.measuredPoints();
-    for (int i = 0; i < SigmaPointCount; ++i) {  // eq. 9
-      measurementError_ = y - measured.col(i);
-      if (present)
-        for (int j = 0; j < MeasDim; ++j)
-          if (!(*present)(j)) measurementError_(j) = Scalar(0);
-      candidateParameterPoints_.col(i) = parameters_;
-      candidateParameterPoints_.col(i).noalias() -=
-          candidateScalings_.asDiagonal() * (candidateTransformation_ * measurementError_);
-      if (boundsActive_) s.parameterBounds.clamp(candidateParameterPoints_.col(i));
-    }
-    candidateParameters_ = candidateParameterPoints_.rowwise().sum() / Scalar(SigmaPointCount);  // eq. 10
-    if (!detail::allFinite(candidateParameterPoints_) || !detail::allFinite(candidateParameters_))
-      return Status::NonFiniteResult;
-    return Status::Ok;
-  }
-
-  // T with the columns of missing components zeroed and each row rescaled to sum to 1 (eq. 14).
-  void reducedTransformation(const MeasurementMask<MeasDim>& present) {
-    const Transformation& t = this->settings_.transformation;
-    for (int r = 0; r < ParamDim; ++r) {
-      Scalar sum = 0;
-      for (int j = 0; j < MeasDim; ++j)
-        if (present(j)) sum += t(r, j);
-      for (int j = 0; j < MeasDim; ++j)
-        maskedTransformation_(r, j) = present(j) && sum != Scalar(0) ? t(r, j) / sum : Scalar(0);
-    }
-  }
-
-  bool boundsActive_;
-  Param parameters_;             // θ̂
-  ParamPoints parameterPoints_;  // θᵢ
-  // Workspace of the parameter correction, committed with the state's.
-  Param candidateParameters_;
-  ParamPoints candidateParameterPoints_;
-  Meas measurementError_;
-  Transformation maskedTransformation_;
-  // The automatic modes (committed with the parameters).
-  Sensitivity sensitivity_;
-  long timeUpdates_ = 0;
-  Transformation transformation_ = Transformation::Zero();
-  Param scalings_ = Param::Zero();
-  Transformation candidateTransformation_ = Transformation::Zero();
-  Param candidateScalings_ = Param::Zero();
-  Scalar openLoopInterval_ = 0;
+      : Engine(detail::Validated{}, model, integrator, settings, initialState, Policy(settings, initialParameters)) {}
 };
 
 }  // namespace mjukf

@@ -10,8 +10,7 @@
 
 #include <Eigen/Core>
 
-#include "mjukf/detail/cholesky.hpp"
-#include "mjukf/detail/finite.hpp"
+#include "mjukf/detail/linear_algebra.hpp"
 #include "mjukf/measurement_gating.hpp"
 
 namespace mjukf {
@@ -126,7 +125,7 @@ class ParameterSensitivity {
   /// differences of g along (W⁻ᵣ, eᵣ), zero on missing components; W ← W⁻ − K ψ; the information
   /// I ← λ I + ψᵀ P_yy⁻¹ ψ with the forgetting λ = exp(−Δt / memory), Δt the time since the last
   /// correction. `innovationFactor` is the lower Cholesky factor S of P_yy and `whitenedCross` is
-  /// U = P_xy S⁻ᵀ, so that K ψ = U (S⁻¹ ψ) (detail/unscented_core.hpp). Returns false (candidates
+  /// U = P_xy S⁻ᵀ, so that K ψ = U (S⁻¹ ψ) (detail/unscented_engine.hpp). Returns false (candidates
   /// unspecified) when a result is not finite.
   template <class Measure, class WhitenedCross>
   bool correct(const State& priorMean, const Param& theta, Measure&& measure, const WhitenedCross& whitenedCross,

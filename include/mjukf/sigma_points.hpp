@@ -1,14 +1,18 @@
 #pragma once
 
 /// \file
-/// Scaled sigma points of van der Merwe (docs/algorithms.md §1).
+/// The sigma-point sets a filter can draw (docs/algorithms.md §1): van der Merwe's scaled set, the
+/// default, and the spherical-radial cubature set of the cubature Kalman filter. A set is a policy of
+/// the filters (their last template argument): its size, its weights and the spread γ of its points
+/// about the mean, all fixed at construction. Both sets here are symmetric (x̂ ± γ Sᵢ for the columns
+/// Sᵢ of a factor of P, with or without x̂ itself), and a step draws them with
+/// detail::drawSymmetricPoints (detail/linear_algebra.hpp).
 
 #include <cmath>
 
 #include <Eigen/Core>
 
-#include "mjukf/detail/cholesky.hpp"
-#include "mjukf/detail/finite.hpp"
+#include "mjukf/detail/linear_algebra.hpp"
 #include "mjukf/detail/validation.hpp"
 #include "mjukf/result.hpp"
 #include "mjukf/settings_error.hpp"
@@ -39,6 +43,8 @@ class MerweScaledSigmaPoints {
   static constexpr int Dim = L;
   /// 2L + 1 points.
   static constexpr int Count = 2 * L + 1;
+  /// The first point is the mean itself.
+  static constexpr bool HasCenter = true;
   /// A vector of dimension L.
   using Vector = Eigen::Matrix<Scalar, L, 1>;
   /// An L × L matrix.
@@ -101,17 +107,7 @@ class MerweScaledSigmaPoints {
   /// again. Only the lower triangle of S is read.
   Status generateFromFactor(const Vector& mean, const Matrix& lowerFactor, Points& points) const {
     if (!detail::allFinite(mean)) return Status::NotPositiveDefinite;
-    for (int i = 0; i < L; ++i) {
-      // Columns of S, where cov = S Sᵀ (rows would be wrong for a correlated cov).
-      points.col(1 + i) = mean;
-      points.col(1 + L + i) = mean;
-      for (int r = i; r < L; ++r) {  // S is lower triangular: rows above the diagonal are zero.
-        const Scalar offset = gamma_ * lowerFactor(r, i);
-        points(r, 1 + i) += offset;
-        points(r, 1 + L + i) -= offset;
-      }
-    }
-    points.col(0) = mean;
+    detail::drawSymmetricPoints<HasCenter>(mean, lowerFactor, gamma_, points);
     return Status::Ok;
   }
 
@@ -133,6 +129,85 @@ class MerweScaledSigmaPoints {
   Weights meanWeights_;
   Weights covarianceWeights_;
   Matrix factor_ = Matrix::Zero();  // workspace of generate()
+};
+
+/// The 2L points of the spherical-radial cubature rule of degree 3 (the cubature Kalman filter,
+/// Arasaratnam and Haykin 2009): x̂ ± √L Sᵢ for the columns Sᵢ of the lower Cholesky factor of P, each
+/// with weight 1/(2L), for the mean and the covariance alike. No point at the mean and no weight below
+/// zero, so P⁻ is a sum of positive terms for every L (the scaled set with κ = 0 and α = 1 gives the
+/// centre a zero mean weight; with α < 1 its weight turns negative). It integrates polynomials up to
+/// degree 3 exactly, as the scaled set does, and has no parameters: the filters' `sigmaPoints` setting
+/// (α, β, κ) is not used with it. The MJUKF cannot take it: its eqs. 8–10 pair 2n + 1 points with
+/// their θᵢ.
+template <class Scalar_, int L>
+class CubatureSigmaPoints {
+  static_assert(L > 0, "the dimension of the sigma points must be positive");
+
+ public:
+  /// The floating-point type.
+  using Scalar = Scalar_;
+  /// L, the dimension of the vector.
+  static constexpr int Dim = L;
+  /// 2L points.
+  static constexpr int Count = 2 * L;
+  /// No point at the mean.
+  static constexpr bool HasCenter = false;
+  /// A vector of dimension L.
+  using Vector = Eigen::Matrix<Scalar, L, 1>;
+  /// An L × L matrix.
+  using Matrix = Eigen::Matrix<Scalar, L, L>;
+  /// The points, one per column.
+  using Points = Eigen::Matrix<Scalar, L, Count>;
+  /// One weight per point.
+  using Weights = Eigen::Matrix<Scalar, Count, 1>;
+
+  /// The set (it has no parameters).
+  CubatureSigmaPoints() : weights_(Weights::Constant(Scalar(1) / Scalar(Count))), gamma_(std::sqrt(Scalar(L))) {}
+  /// The filters build their sets from their `sigmaPoints` setting; the cubature set does not use it.
+  CubatureSigmaPoints(detail::Validated, const SigmaPointParameters<Scalar>&) : CubatureSigmaPoints() {}
+  /// Always valid: the set has no parameters, and `parameters` is not used.
+  static SettingsError validate(const SigmaPointParameters<Scalar>& /*parameters*/) { return {}; }
+
+  /// Writes the points of (mean, cov) into `points`: mean ± √L times the columns of the lower Cholesky
+  /// factor of `cov` (only its lower triangle is read). Returns Status::NotPositiveDefinite, with
+  /// `points` untouched, when `cov` has no factor or is not finite.
+  Status generate(const Vector& mean, const Matrix& cov, Points& points) {
+    if (!detail::allFinite(cov) || !detail::choleskyLower(cov, factor_)) return Status::NotPositiveDefinite;
+    return generateFromFactor(mean, factor_, points);
+  }
+  /// The same points from a lower Cholesky factor S of the covariance (cov = S Sᵀ).
+  Status generateFromFactor(const Vector& mean, const Matrix& lowerFactor, Points& points) const {
+    if (!detail::allFinite(mean)) return Status::NotPositiveDefinite;
+    detail::drawSymmetricPoints<HasCenter>(mean, lowerFactor, gamma_, points);
+    return Status::Ok;
+  }
+
+  /// The mean weights, 1/(2L) each.
+  const Weights& meanWeights() const { return weights_; }
+  /// The covariance weights, 1/(2L) each.
+  const Weights& covarianceWeights() const { return weights_; }
+  /// γ = √L, the scale of the points' spread.
+  Scalar gamma() const { return gamma_; }
+
+ private:
+  Weights weights_;
+  Scalar gamma_;
+  Matrix factor_ = Matrix::Zero();  // workspace of generate()
+};
+
+/// Selects van der Merwe's scaled set (the default) as a filter's sigma points: the last template
+/// argument of `Ukf`, `JointUkf`, `ModifiedJointUkf` and `DualUkf`.
+struct MerweScaled {
+  /// The set at dimension L.
+  template <class Scalar, int L>
+  using Set = MerweScaledSigmaPoints<Scalar, L>;
+};
+
+/// Selects the cubature set as a filter's sigma points (not for `ModifiedJointUkf`).
+struct Cubature {
+  /// The set at dimension L.
+  template <class Scalar, int L>
+  using Set = CubatureSigmaPoints<Scalar, L>;
 };
 
 }  // namespace mjukf

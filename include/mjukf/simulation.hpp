@@ -20,21 +20,6 @@ namespace mjukf {
 /// \cond INTERNAL
 namespace detail {
 
-// An input source as stepModel takes it, made callable: a held value (any expression convertible to
-// Model::Input is evaluated once), or the caller's callable t -> Input as it is.
-template <class Model, class Inputs>
-auto inputSource(const Inputs& inputs) {
-  using Input = typename Model::Input;
-  using Scalar = typename Model::Scalar;
-  if constexpr (std::is_convertible_v<const Inputs&, Input>) {
-    return [u = Input(inputs)](Scalar) -> const Input& { return u; };
-  } else {
-    static_assert(std::is_invocable_r_v<Input, const Inputs&, Scalar>,
-                  "the input must be a Model::Input (held over the step) or a callable Scalar t -> Model::Input");
-    return [&inputs](Scalar t) -> decltype(auto) { return inputs(t); };
-  }
-}
-
 // The input a simulation without an explicit one uses: the model's signal u(t), or for a model with
 // no input at all (InputDim = 0, no input(t)) the empty vector.
 template <class Model>
@@ -51,34 +36,6 @@ auto defaultInputs(const Model& model) {
 
 }  // namespace detail
 /// \endcond
-
-/// One integrator step of size h of `model` from the state x at time t under the parameters θ:
-/// x⁺ = Φ_h(x; t, θ), with ẋ = f(t, x, u(t), θ) = model.derivative(t, x, u, θ); for a discrete-time
-/// model (model.hpp), x⁺ = model.transition(t, h, x, u(t), θ), and the integrator is not used.
-///
-/// `inputs` gives u: either a `Model::Input` (or an expression convertible to it), held constant over
-/// the step (zero-order hold, as `timeUpdate(t, h, u)` does), or a callable `Scalar t -> Model::Input`,
-/// evaluated at every stage time the integrator asks for (as `timeUpdate(t, h)` does with the model's
-/// own `input(t)`).
-///
-/// `simulate`, and the simulations of the tests, examples and benchmarks, take every step of a model
-/// through this function: it is the one place that says what one step of the plant is.
-template <class Model, class Integrator, class Inputs>
-typename Model::State stepModel(const Model& model, const Integrator& integrator, typename Model::Scalar t,
-                                typename Model::Scalar h, const typename Model::State& x, const Inputs& inputs,
-                                const typename Model::Param& theta) {
-  static_assert(checkModel<Model>());
-  using Scalar = typename Model::Scalar;
-  using State = typename Model::State;
-  const auto input = detail::inputSource<Model>(inputs);
-  if constexpr (isDiscreteTime<Model>) {
-    static_cast<void>(integrator);
-    return model.transition(t, h, x, input(t), theta);  // the input at the start of the step
-  } else {
-    const auto rhs = [&](Scalar time, const State& z) -> State { return model.derivative(time, z, input(time), theta); };
-    return integrator.step(rhs, t, x, h);
-  }
-}
 
 /// One integrator step as above with the model's own input signal u(t), evaluated at every stage time
 /// (a model without `input(t)` must have InputDim = 0; otherwise pass the input).

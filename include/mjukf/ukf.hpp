@@ -5,7 +5,6 @@
 
 #include <Eigen/Core>
 
-#include "mjukf/detail/propagation.hpp"
 #include "mjukf/detail/unscented_engine.hpp"
 #include "mjukf/detail/validation.hpp"
 #include "mjukf/filter_settings.hpp"
@@ -26,6 +25,54 @@ struct UkfSettings : UnscentedSettings<Scalar, StateDim, MeasDim> {
 template <class Model>
 using UkfSettingsFor = UkfSettings<typename Model::Scalar, Model::StateDim, Model::MeasDim>;
 
+namespace detail {
+
+/// The parameter policy of `Ukf`: the parameters are known and fixed (detail/unscented_engine.hpp §3
+/// lists what a policy supplies).
+template <class Model, class Integrator, class Settings, class Est>
+class KnownParameters : public ParameterPolicy<Model, Integrator, Settings, Est> {
+ public:
+  using Scalar = typename Model::Scalar;
+  using Param = typename Model::Param;
+  using Vector = typename Est::Vector;
+
+  explicit KnownParameters(const Param& parameters) : parameters_(parameters) {}
+  const Param& parameters() const { return parameters_; }
+  void reset(const Param& parameters) { parameters_ = parameters; }
+
+  template <class Step>
+  Status predictParameters(const Step&, const Est&) {
+    return Status::Ok;
+  }
+  // χᵢ⁺ = Φ_h(χᵢ; t, θ)
+  template <class Step>
+  void propagatePoints(const Step& step, typename Est::Points& points) {
+    for (int i = 0; i < Est::Count; ++i) points.col(i) = step.propagate(parameters_, points.col(i));
+  }
+  template <class Step>
+  Vector propagateMean(const Step& step, const Vector& mean) {
+    return step.propagate(parameters_, mean);
+  }
+  // Yᵢ = g(χᵢ⁺, θ)
+  void measurePoints(const Model& model, const typename Est::Points& points, typename Est::MeasPoints& measured) {
+    for (int i = 0; i < Est::Count; ++i) measured.col(i) = model.measurement(points.col(i), parameters_);
+  }
+  template <class Engine>
+  Status update(Engine& engine, const typename Model::Meas& y, const typename Est::Mask* present) {
+    return engine.correctState(y, present);
+  }
+  Status correctParameters(const Correction<Model, Settings, Est>&) { return Status::Ok; }
+  void constrainMean(Vector&) {}
+  void commitPrediction() {}
+  void commitCorrection() {}
+  void commitOpenLoop(Scalar) {}
+
+ private:
+  Param parameters_;
+};
+
+}  // namespace detail
+
 /// Unscented Kalman filter of the state of `Model`, whose parameters are known and fixed.
 ///
 /// 2n + 1 sigma points, each propagated with `Integrator` (by default the paper's I-TR-BDF2, or none
@@ -36,13 +83,20 @@ using UkfSettingsFor = UkfSettings<typename Model::Scalar, Model::StateDim, Mode
 ///
 /// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
 /// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
-template <class Model_, class Integrator_ = DefaultIntegrator<Model_>>
-class Ukf : public detail::UnscentedEngine<Ukf<Model_, Integrator_>, Model_, Integrator_, UkfSettingsFor<Model_>,
-                                           Model_::StateDim> {
+template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled>
+class Ukf : public detail::UnscentedEngine<
+                Ukf<Model_, Integrator_, PointSet>, Model_, Integrator_, UkfSettingsFor<Model_>,
+                detail::KnownParameters<Model_, Integrator_, UkfSettingsFor<Model_>,
+                                        detail::Estimate<typename Model_::Scalar, Model_::StateDim, Model_::MeasDim,
+                                                         PointSet>>,
+                Model_::StateDim, PointSet> {
   static_assert(checkModel<Model_>());
-  using Engine =
-      detail::UnscentedEngine<Ukf<Model_, Integrator_>, Model_, Integrator_, UkfSettingsFor<Model_>, Model_::StateDim>;
+  using Est = detail::Estimate<typename Model_::Scalar, Model_::StateDim, Model_::MeasDim, PointSet>;
+  using Policy = detail::KnownParameters<Model_, Integrator_, UkfSettingsFor<Model_>, Est>;
+  using Engine = detail::UnscentedEngine<Ukf, Model_, Integrator_, UkfSettingsFor<Model_>, Policy, Model_::StateDim,
+                                         PointSet>;
   friend Engine;
+  friend Policy;
 
  public:
   /// The model's scalar and vector types (see the engine, detail/unscented_engine.hpp).
@@ -51,8 +105,8 @@ class Ukf : public detail::UnscentedEngine<Ukf<Model_, Integrator_>, Model_, Int
   using Settings = UkfSettingsFor<Model_>;
   /// An n × n matrix: the state covariance.
   using StateMatrix = Eigen::Matrix<Scalar, Engine::StateDim, Engine::StateDim>;
-  /// 2n + 1 sigma points.
-  static constexpr int SigmaPointCount = 2 * Engine::StateDim + 1;
+  /// The number of sigma points: 2n + 1 (van der Merwe's set, the default) or 2n (cubature).
+  using Engine::SigmaPointCount;
 
 #if MJUKF_EXCEPTIONS
   /// Throws std::invalid_argument naming the setting when a setting or the initial values are invalid
@@ -70,24 +124,24 @@ class Ukf : public detail::UnscentedEngine<Ukf<Model_, Integrator_>, Model_, Int
   }
 
   /// The state estimate x̂.
-  const State& state() const { return this->core_.mean(); }
+  const State& state() const { return this->estimate_.mean(); }
   /// The state covariance P (n × n).
-  const StateMatrix& covariance() const { return this->core_.covariance(); }
+  const StateMatrix& covariance() const { return this->estimate_.covariance(); }
   /// The fixed parameters the model is evaluated with.
-  const Param& parameters() const { return parameters_; }
+  const Param& parameters() const { return this->policy_.parameters(); }
 
   /// Starts again from (state, covariance), keeping the parameters: recovers a diverged filter without
   /// rebuilding it. When one is not finite or the covariance is not symmetric positive definite, it
   /// changes nothing and throws std::invalid_argument naming the argument (without exceptions: returns
   /// the SettingsError; ResetResult, settings_error.hpp).
-  ResetResult reset(const State& state, const StateMatrix& covariance) { return reset(state, covariance, parameters_); }
+  ResetResult reset(const State& state, const StateMatrix& covariance) { return reset(state, covariance, parameters()); }
   /// Starts again from (state, covariance) with other fixed parameters.
   ResetResult reset(const State& state, const StateMatrix& covariance, const Param& parameters) {
     if (SettingsError e = detail::requireFinite(kOwner, "state", state)) return detail::report(e);
     if (SettingsError e = detail::requireFinite(kOwner, "parameters", parameters)) return detail::report(e);
     if (SettingsError e = Engine::checkResetCovariance(kOwner, covariance)) return detail::report(e);
     this->resetEstimate(state, covariance);
-    parameters_ = parameters;
+    this->policy_.reset(parameters);
     return ResetResult();
   }
 
@@ -96,24 +150,7 @@ class Ukf : public detail::UnscentedEngine<Ukf<Model_, Integrator_>, Model_, Int
 
   Ukf(detail::Validated, const Model_& model, const State& initialState, const Param& parameters,
       const Settings& settings, const Integrator_& integrator)
-      : Engine(detail::Validated{}, model, integrator, settings, initialState), parameters_(parameters) {}
-
-  // χᵢ⁺ = Φ_h(χᵢ; t, θ)
-  template <class InputSource>
-  void propagatePoints(const InputSource& input, Scalar t, Scalar h, int steps, typename Engine::Points& points) {
-    for (int i = 0; i < SigmaPointCount; ++i)
-      points.col(i) = detail::propagate(this->model_, this->integrator_, input, parameters_, t, h, steps, points.col(i));
-  }
-  // Yᵢ = g(χᵢ⁺, θ)
-  void measurePoints(const typename Engine::Points& points, typename Engine::MeasPoints& measured) {
-    for (int i = 0; i < SigmaPointCount; ++i) measured.col(i) = this->model_.measurement(points.col(i), parameters_);
-  }
-  template <class InputSource>
-  State propagateOpenLoop(const InputSource& input, Scalar t, Scalar h, int steps) {
-    return detail::propagate(this->model_, this->integrator_, input, parameters_, t, h, steps, state());
-  }
-
-  Param parameters_;
+      : Engine(detail::Validated{}, model, integrator, settings, initialState, Policy(parameters)) {}
 };
 
 }  // namespace mjukf

@@ -8,13 +8,15 @@
 
 #include <Eigen/Core>
 
+#include "mjukf/detail/linear_algebra.hpp"
+
 namespace mjukf {
 
 /// mean = Σ Wmᵢ Xᵢ
 template <class Points, class Weights, class Mean>
 void unscentedMean(const Eigen::MatrixBase<Points>& points, const Eigen::MatrixBase<Weights>& meanWeights,
                    Eigen::MatrixBase<Mean>& mean) {
-  mean.noalias() = points * meanWeights;
+  detail::weightedMean(points, meanWeights, mean);
 }
 
 /// cov = Σ Wcᵢ (Xᵢ − a)(Yᵢ − b)ᵀ, given the deviations Xᵢ − a and Yᵢ − b as columns. With the same
@@ -22,9 +24,7 @@ void unscentedMean(const Eigen::MatrixBase<Points>& points, const Eigen::MatrixB
 template <class DevX, class DevY, class Weights, class Cov>
 void unscentedCovarianceFromDeviations(const Eigen::MatrixBase<DevX>& devX, const Eigen::MatrixBase<DevY>& devY,
                                        const Eigen::MatrixBase<Weights>& covWeights, Eigen::MatrixBase<Cov>& cov) {
-  // lazyProduct: at these sizes (L ≤ ~12) Eigen's default product takes its blocked GEMM path, whose
-  // packing costs several times the arithmetic.
-  cov.noalias() = (devX * covWeights.asDiagonal()).lazyProduct(devY.transpose());
+  detail::weightedOuterSum(devX, devY, covWeights, cov);
 }
 
 /// The unscented transform of a propagated point set: its weighted mean and covariance (§2, without Q).

@@ -97,7 +97,7 @@ void check(const Filter& after, const Filter& before, mjukf::Status status) {
         fail("a taken step left a non-finite estimate or covariance");
       if (!(p.array() == p.transpose().array()).all()) fail("a taken step left a covariance that is not symmetric");
       // The library's promise: P has the Cholesky factor its next draw needs (its own factorisation,
-      // with the pivot margin of detail/cholesky.hpp) ...
+      // with the pivot margin of detail/linear_algebra.hpp) ...
       typename std::decay_t<decltype(p)>::PlainObject factor;
       if (!mjukf::detail::choleskyLower(p, factor)) fail("a taken step left a covariance without a Cholesky factor");
       // ... and, checked independently, P is positive semi-definite to within rounding. Not Eigen's LLT

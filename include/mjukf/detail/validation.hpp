@@ -10,7 +10,7 @@
 
 #include <Eigen/Core>
 
-#include "mjukf/detail/cholesky.hpp"
+#include "mjukf/detail/linear_algebra.hpp"
 #include "mjukf/settings_error.hpp"
 
 #if MJUKF_EXCEPTIONS

@@ -189,7 +189,7 @@ class Session {
 /// \endcond
 
 /// `f(t, x) = model.derivative(t, x, model.input(t), θ)`: a model with its own input signal, as the
-/// filters integrate it (detail/propagation.hpp). The model is held by reference.
+/// filters integrate it (detail/unscented_engine.hpp). The model is held by reference.
 template <class Model>
 auto modelRhs(const Model& model, const typename Model::Param& theta) {
   return [&model, theta](typename Model::Scalar t, const typename Model::State& x) -> typename Model::State {
