@@ -3,9 +3,9 @@
 # bash scripts/setup.sh [more packages…] (scripts/embedded.sh adds the ARM toolchain and QEMU).
 set -euo pipefail
 # clang and libclang-rt-14-dev: the libFuzzer target (-fsanitize=fuzzer) of scripts/test.sh; doxygen:
-# the API reference (target mjukf_docs).
+# the API reference (target mjukf_docs); clang-format (14 on Debian 12): scripts/check_format.sh.
 packages=(cmake g++ make xz-utils libeigen3-dev libsundials-dev libgtest-dev libbenchmark-dev gnuplot-nox clang libclang-rt-14-dev
-  doxygen "$@")
+  doxygen clang-format "$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p")
