@@ -64,14 +64,14 @@ using DiscreteIntegrator = mjukf::NoIntegrator<double>;
 
 // The robot's preset for filter template F, as the settings of F over `Model`, in the given ordering
 // when F is the dual filter.
-template <template <class, class> class F, class Model>
+template <template <class...> class F, class Model>
 auto robotSettings(DualUkfOrdering ordering) {
   auto s = mjukf::testing::presetSettings<F, Robot, Model>();
   if constexpr (IsDual<F<Model, mjukf::DefaultIntegrator<Model>>>::value) s.ordering = ordering;
   return s;
 }
 
-template <template <class, class> class F>
+template <template <class...> class F>
 struct Pair {
   using ContinuousFilter = F<Continuous, ContinuousIntegrator>;
   using DiscreteFilter = F<Discrete, DiscreteIntegrator>;
@@ -115,7 +115,7 @@ void appendRow(std::vector<double>& out, const Filter& f) {
 
 // The paper's schedule (paper::runSchedule: a time and a measurement update every 5th step, the mean
 // open loop otherwise) over the whole robot reference file: every row bit for bit the same.
-template <template <class, class> class F>
+template <template <class...> class F>
 void expectPaperScheduleBitForBit(DualUkfOrdering ordering = DualUkfOrdering::PriorParameters) {
   static const std::vector<Robot::Model::Meas> y = referenceMeasurements();
   auto continuous = Pair<F>::continuous(ordering);
@@ -157,7 +157,7 @@ TEST(DiscreteModel, DualUkfEqualsContinuousEulerOnThePaperSchedule) {
 // Every other kind of call: time updates over 3 steps with the input signal and with a held input,
 // open-loop propagation over 2 steps with both, a measurement update without a time update before
 // it, and masked updates; compared after every call.
-template <template <class, class> class F>
+template <template <class...> class F>
 void expectEveryCallBitForBit(DualUkfOrdering ordering = DualUkfOrdering::PriorParameters) {
   static const std::vector<Robot::Model::Meas> y = referenceMeasurements();
   auto continuous = Pair<F>::continuous(ordering);

@@ -122,7 +122,7 @@ struct Snapshot {
   }
 };
 
-template <template <class, class> class FilterTemplate, class Stepper = mjukf::ITrBdf2<double>,
+template <template <class...> class FilterTemplate, class Stepper = mjukf::ITrBdf2<double>,
           mjukf::DualUkfOrdering Ordering = mjukf::DualUkfOrdering::PriorParameters, class Model = ToyModel,
           bool AutomaticMjukf = false>
 struct Toy {
@@ -154,7 +154,7 @@ struct Toy {
 
 template <class T>
 class FailurePolicy : public ::testing::Test {};
-template <template <class, class> class F>
+template <template <class...> class F>
 struct Kind {
   template <class Stepper = mjukf::ITrBdf2<double>>
   using With = Toy<F, Stepper>;

@@ -11,7 +11,12 @@ namespace mjukf {
 #define MJUKF_INSTANTIATE_FOR(Scalar)                                                               \
   template class MerweScaledSigmaPoints<Scalar, 1>;                                                  \
   template class MerweScaledSigmaPoints<Scalar, 6>;                                                  \
-  template class detail::UnscentedCore<Scalar, 4, 4>;                                                \
+  template class detail::Estimate<Scalar, 4, 4>;                                                     \
+  template class detail::Estimate<Scalar, 3, 2, Cubature>;                                           \
+  template class CubatureSigmaPoints<Scalar, 3>;                                                     \
+  template class Ukf<models::CoupledTank<Scalar>, Rk4<Scalar>, Cubature>;                            \
+  template class JointUkf<models::FlexibleJoint<Scalar>, Rk4<Scalar>, Cubature>;                     \
+  template class DualUkf<models::FlexibleJoint<Scalar>, ITrBdf2<Scalar>, Cubature>;                  \
   template class ITrBdf2<Scalar>;                                                                    \
   template class ExplicitTrBdf2<Scalar>;                                                             \
   template class Rk4<Scalar>;                                                                        \

@@ -63,7 +63,7 @@ long allocationsDuring(Body&& body) {
 template <class T>
 class NoAllocation : public ::testing::Test {};
 
-template <template <class, class> class F, class E>
+template <template <class...> class F, class E>
 struct Case : mjukf::testing::PaperFilter<F, E> {};
 
 // The dual filter with the experiment's dualUkf() settings, in the given ordering.
@@ -83,7 +83,7 @@ static_assert(mjukf::isDiscreteTime<DiscreteRobot<double>>);
 
 // Each filter over DiscreteRobot with the robot's settings for it (the settings' shared part is the same
 // type for both models: only the model parameter of the settings template differs).
-template <template <class, class> class F, class Scalar,
+template <template <class...> class F, class Scalar,
           mjukf::DualUkfOrdering Ordering = mjukf::DualUkfOrdering::PriorParameters>
 struct DiscreteCase {
   using E = mjukf::paper::FlexibleJointExperiment<Scalar>;
@@ -112,7 +112,7 @@ struct Automatic {
 };
 
 // issue 10 (part A): the 2019 MJUKF paper's systems, with their integrator (RK4) and no input.
-template <template <class, class> class F, class E>
+template <template <class...> class F, class E>
 struct Case2019 {
   using Model = typename E::Model;
   static F<Model, typename E::Integrator> make() {

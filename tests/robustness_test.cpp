@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include "mjukf/covariance_repair.hpp"
+#include "mjukf/detail/unscented_engine.hpp"  // CovarianceGuard
 #include "mjukf/measurement_gating.hpp"
 #include "mjukf/paper/experiments.hpp"
 #include "mjukf/paper/rmse.hpp"
@@ -161,7 +162,7 @@ TEST(IndefiniteUpdate, FilterIsNeverLeftWithoutACholeskyFactor) {
 
 template <class T>
 class Hardening : public ::testing::Test {};
-template <template <class, class> class F, class E>
+template <template <class...> class F, class E>
 struct Case : mjukf::testing::PaperFilter<F, E> {
   using Experiment = E;
 };
@@ -308,7 +309,7 @@ struct FaultyModel : Base {
   }
 };
 
-template <class Experiment, template <class, class> class F>
+template <class Experiment, template <class...> class F>
 auto makeFaulty(const FaultPlan* plan) {
   using Base = typename Experiment::Model;
   using Model = FaultyModel<Base>;
@@ -338,7 +339,7 @@ auto makeFaulty(const FaultPlan* plan) {
 
 template <class T>
 class FaultyModelOutput : public ::testing::Test {};
-template <template <class, class> class F, class E>
+template <template <class...> class F, class E>
 struct FaultCase {
   static auto make(const FaultPlan* plan) { return makeFaulty<E, F>(plan); }
 };
@@ -448,7 +449,7 @@ struct UpperLevelTank : mjukf::models::CoupledTank<Scalar> {
   Meas measurement(const typename Base::State& x, const typename Base::Param&) const { return Meas(x(0)); }
 };
 
-template <template <class, class> class F>
+template <template <class...> class F>
 void expectMaskedTankEqualsReduced() {
   using Full = mjukf::models::CoupledTank<double>;
   using Reduced = UpperLevelTank<double>;
@@ -521,7 +522,7 @@ TEST(Gating, ChiSquareQuantilesAreRight) {
 
 // The tank's filter with an R that matches the noise of the data below (σ = 0.3 cm), gated at χ²
 // quantile `probability` (0: no gate).
-template <template <class, class> class F>
+template <template <class...> class F>
 auto gatedTank(double probability) {
   auto filter = mjukf::testing::PaperFilter<F, Tank>::make();
   auto s = filter.settings();
@@ -573,7 +574,7 @@ TEST(Gating, InvalidThresholdsAreRefused) {
 
 // Outliers: 1% of the measurements replaced by gross ones (±20 cm, ~70σ). With the gate on, the
 // RMSE of k_flow stays within 10% of the run on clean data; without it, it does not.
-template <template <class, class> class F>
+template <template <class...> class F>
 double tankRmse(double gateProbability, double outlierFraction, unsigned long long seed) {
   auto filter = gatedTank<F>(gateProbability);
   using Filter = decltype(filter);
@@ -599,7 +600,7 @@ double tankRmse(double gateProbability, double outlierFraction, unsigned long lo
   return rmse.value()(0);
 }
 
-template <template <class, class> class F>
+template <template <class...> class F>
 void expectOutliersHandled(const char* name) {
   const double clean = tankRmse<F>(0.9999, 0.0, 41);
   const double gated = tankRmse<F>(0.9999, 0.01, 41);

@@ -36,7 +36,7 @@ static_assert(MJUKF_EXCEPTIONS == 0, "-fno-exceptions: the library only returns 
 #endif
 
 // The filter types of the typed suite, each with its preset from the paper.
-template <template <class, class> class F>
+template <template <class...> class F>
 struct FilterKind {
   using Type = F<Model, mjukf::DefaultIntegrator<Model>>;
   static auto settings() { return mjukf::testing::presetSettings<F, Experiment>(); }

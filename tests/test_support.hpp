@@ -105,7 +105,7 @@ struct DiscreteRobot {
 
 /// The preset of the paper's `Experiment` for filter template F (the UKF's, JUKF's, MJUKF's or the dual
 /// filter's). Settings depend only on the sizes, so it serves any `Model` of the experiment's shape.
-template <template <class, class> class F, class Experiment, class Model = typename Experiment::Model>
+template <template <class...> class F, class Experiment, class Model = typename Experiment::Model>
 auto presetSettings() {
   using E = typename Experiment::Model;
   if constexpr (std::is_same_v<F<E, int>, Ukf<E, int>>)
@@ -120,7 +120,7 @@ auto presetSettings() {
 
 /// The three filters on one experiment of the paper, built with its settings, so typed tests can
 /// sweep filter × plant.
-template <template <class, class> class Filter, class Experiment>
+template <template <class...> class Filter, class Experiment>
 struct PaperFilter {
   using Model = typename Experiment::Model;
   using Type = Filter<Model, ITrBdf2<typename Model::Scalar>>;

@@ -168,7 +168,7 @@ void drive(FuzzedDataProvider& in, Filter& filter) {
   }
 }
 
-template <template <class, class> class F, class Model>
+template <template <class...> class F, class Model>
 void run(FuzzedDataProvider& in) {
   using Filter = F<Model, mjukf::ITrBdf2<double>>;
   typename Filter::Settings s;
