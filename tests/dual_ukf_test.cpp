@@ -50,10 +50,10 @@ const char* name(DualUkfOrdering ordering) {
 using Euler = mjukf::testing::Euler<double>;
 
 // The shared (state filter) settings of a dual filter, as the settings of a Ukf.
-template <class Model>
-mjukf::UkfSettingsFor<Model> stateSettings(const mjukf::DualUkfSettingsFor<Model>& dual) {
-  mjukf::UkfSettingsFor<Model> s;
-  static_cast<mjukf::UnscentedSettings<typename Model::Scalar, Model::StateDim, Model::MeasDim>&>(s) = dual;
+template <class Scalar, int N, int P, int M>
+mjukf::UkfSettings<Scalar, N, M> stateSettings(const mjukf::DualUkfSettings<Scalar, N, P, M>& dual) {
+  mjukf::UkfSettings<Scalar, N, M> s;
+  static_cast<mjukf::UnscentedSettings<Scalar, N, M>&>(s) = dual;
   return s;
 }
 

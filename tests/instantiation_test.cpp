@@ -34,10 +34,10 @@ namespace mjukf {
   template class ModifiedJointUkf<models::FlexibleJoint<Scalar>>;                                    \
   template class DualUkf<models::CoupledTank<Scalar>>;                                               \
   template class DualUkf<models::FlexibleJoint<Scalar>>;                                             \
-  template struct DualUkfSettingsFor<models::FlexibleJoint<Scalar>>;                                    \
-  template struct UkfSettingsFor<models::FlexibleJoint<Scalar>>;                                        \
-  template struct JointUkfSettingsFor<models::FlexibleJoint<Scalar>>;                                   \
-  template struct ModifiedJointUkfSettingsFor<models::FlexibleJoint<Scalar>>;                           \
+  template struct DualUkfSettings<Scalar, 4, 2, 4>;                                                     \
+  template struct UkfSettings<Scalar, 4, 4>;                                                            \
+  template struct JointUkfSettings<Scalar, 4, 2, 4>;                                                    \
+  template struct ModifiedJointUkfSettings<Scalar, 4, 2, 4>;                                            \
   template struct UpdateDiagnostics<Scalar, 4>;                                                      \
   template class paper::RmseAccumulator<Scalar, 2>;                                                  \
   template struct paper::CoupledTankExperiment<Scalar>;                                              \

@@ -1,5 +1,6 @@
 // Scaled sigma points (docs/algorithms.md §1): weights, and the moments the points reproduce.
 
+#include <cmath>
 #include <limits>
 #include <random>
 
@@ -125,3 +126,46 @@ TEST(SigmaPoints, RejectInvalidScaling) {
 }
 
 }  // namespace
+
+// ---- The cubature set ---------------------------------------------------------------------------
+
+// Known answers of the spherical-radial rule of degree 3 for x ~ N(μ, P): the points reproduce μ and P
+// exactly (up to rounding), E[xᵢ xⱼ xₖ] about μ is zero (odd moments vanish by symmetry), and the fourth
+// moment E[(x₀ − μ₀)⁴] is L σ₀⁴ ... of a diagonal P, where the Gaussian's is 3 σ₀⁴: the rule is exact to
+// degree 3 only, which is the textbook limit of the cubature filter.
+TEST(CubatureSigmaPoints, ReproduceMeanCovarianceAndOddMomentsExactly) {
+  constexpr int L = 5;
+  std::mt19937_64 rng(7);
+  mjukf::CubatureSigmaPoints<double, L> sigma;
+  EXPECT_EQ(sigma.Count, 2 * L);
+  EXPECT_NEAR(sigma.meanWeights().sum(), 1.0, 4 * L * std::numeric_limits<double>::epsilon());
+  for (int trial = 0; trial < 20; ++trial) {
+    const Eigen::Matrix<double, L, L> p = mjukf::testing::randomCovariance<L>(rng);
+    const Eigen::Matrix<double, L, 1> mu = Eigen::Matrix<double, L, 1>::Random();
+    Eigen::Matrix<double, L, 2 * L> points;
+    ASSERT_EQ(sigma.generate(mu, p, points), Status::Ok);
+    const Eigen::Matrix<double, L, 1> mean = points * sigma.meanWeights();
+    const Eigen::Matrix<double, L, 2 * L> d = points.colwise() - mu;
+    const Eigen::Matrix<double, L, L> cov = d * sigma.covarianceWeights().asDiagonal() * d.transpose();
+    // Rounding: each entry is a sum of 2L products of entries of size ~‖P‖.
+    const double bound = 16 * L * std::numeric_limits<double>::epsilon() * p.cwiseAbs().maxCoeff();
+    EXPECT_LT((mean - mu).cwiseAbs().maxCoeff(), 16 * L * std::numeric_limits<double>::epsilon() * (1 + mu.norm()));
+    EXPECT_LT((cov - p).cwiseAbs().maxCoeff(), bound);
+    double third = 0;
+    for (int i = 0; i < 2 * L; ++i) third += sigma.meanWeights()(i) * d(0, i) * d(1, i) * d(2, i);
+    EXPECT_LT(std::abs(third), bound * p.cwiseAbs().maxCoeff());
+  }
+  const Eigen::Matrix<double, L, L> diagonal = Eigen::Matrix<double, L, 1>::Constant(4.0).asDiagonal();
+  Eigen::Matrix<double, L, 2 * L> points;
+  ASSERT_EQ(sigma.generate(Eigen::Matrix<double, L, 1>::Zero(), diagonal, points), Status::Ok);
+  double fourth = 0;
+  for (int i = 0; i < 2 * L; ++i) fourth += sigma.meanWeights()(i) * std::pow(points(0, i), 4);
+  EXPECT_NEAR(fourth, L * 16.0, 1e-12);  // σ₀⁴ = 16; the Gaussian's would be 48
+}
+
+TEST(CubatureSigmaPoints, HaveNoCentreAndIgnoreTheScalingParameters) {
+  using Cubature3 = mjukf::CubatureSigmaPoints<double, 3>;
+  EXPECT_FALSE(Cubature3::HasCenter);
+  EXPECT_FALSE(Cubature3::validate({-1.0, 0.0, -10.0}));
+  EXPECT_DOUBLE_EQ(Cubature3().gamma(), std::sqrt(3.0));
+}

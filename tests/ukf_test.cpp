@@ -59,7 +59,7 @@ void discretise(const Model& model, double t, double h, int steps, Eigen::Matrix
 
 enum class Update { Redraw, PaperAlgorithm1 };
 
-template <int M>
+template <int M, class PointSet = mjukf::MerweScaled>
 void expectUkfEqualsKalmanFilter(const mjukf::SigmaPointParameters<double>& sigma, int stepsPerUpdate,
                                  Update update = Update::Redraw) {
   using Model = mjukf::testing::LinearModel<M>;
@@ -68,14 +68,15 @@ void expectUkfEqualsKalmanFilter(const mjukf::SigmaPointParameters<double>& sigm
 
   std::mt19937_64 rng(1234);
   std::normal_distribution<double> normal;
-  typename mjukf::Ukf<Model>::Settings settings;
+  using Filter = mjukf::Ukf<Model, mjukf::DefaultIntegrator<Model>, PointSet>;
+  typename Filter::Settings settings;
   settings.sigmaPoints = sigma;
   settings.initialCovariance = mjukf::testing::randomCovariance<3>(rng);
   settings.processNoise = mjukf::testing::randomCovariance<3>(rng, 1e-3);
   settings.measurementNoise = 0.05 * Eigen::Matrix<double, M, M>::Identity();
   settings.redrawPointsForUpdate = update == Update::Redraw;
   const Eigen::Vector3d x0(0.3, -0.2, 1.0);
-  mjukf::Ukf<Model> ukf(model, x0, typename Model::Param(), settings);
+  Filter ukf(model, x0, typename Model::Param(), settings);
   KalmanFilter<M> kf{x0, settings.initialCovariance, update == Update::PaperAlgorithm1};
 
   const double h = 0.01;
@@ -120,6 +121,16 @@ TEST(Ukf, PaperAlgorithm1EqualsKalmanFilterWhoseGainOmitsQ) {
   expectUkfEqualsKalmanFilter<3>({1.0, 2.0, 0.0}, 1, Update::PaperAlgorithm1);
   expectUkfEqualsKalmanFilter<1>({1.0, 2.0, 0.0}, 1, Update::PaperAlgorithm1);
   expectUkfEqualsKalmanFilter<1>({0.5, 2.0, 1.0}, 4, Update::PaperAlgorithm1);
+}
+
+// The cubature set (2L points, weights 1/2L, no centre point) carries a Gaussian through a linear map
+// exactly too: with redrawn points the cubature Kalman filter is the Kalman filter, and with the paper's
+// reuse of the propagated points it omits Q from the gain as the scaled set does. Its α, β, κ are not
+// used, so any setting gives the same filter.
+TEST(Ukf, CubatureSetEqualsKalmanFilterOnLinearModel) {
+  expectUkfEqualsKalmanFilter<3, mjukf::Cubature>({1.0, 2.0, 0.0}, 1);
+  expectUkfEqualsKalmanFilter<1, mjukf::Cubature>({0.3, -1.0, 5.0}, 3);
+  expectUkfEqualsKalmanFilter<1, mjukf::Cubature>({1.0, 2.0, 0.0}, 1, Update::PaperAlgorithm1);
 }
 
 TEST(Ukf, HeldInputEqualsSignalWhenTheSignalIsConstant) {

@@ -68,19 +68,17 @@ namespace detail {
 /// (with the UpdatedParameters ordering, after predicting the state's last step again with the
 /// corrected θ̂); the engine commits both or neither. detail/unscented_engine.hpp §3 lists what a
 /// policy supplies.
-template <class Model, class Integrator, class Settings, class Est, class PointSet>
+template <class Model, class Integrator, class Settings, class Est>
 class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> {
+  using Base = ParameterPolicy<Model, Integrator, Settings, Est>;
+
  public:
-  using Scalar = typename Model::Scalar;
-  using State = typename Model::State;
-  using Param = typename Model::Param;
-  using Meas = typename Model::Meas;
-  using Input = typename Model::Input;
-  using Vector = typename Est::Vector;
-  using Mask = typename Est::Mask;
-  static constexpr int StateDim = Model::StateDim, ParamDim = Model::ParamDim, MeasDim = Model::MeasDim;
-  /// The parameter filter: an estimate of θ measured through the m components of y.
-  using ParameterEstimate = Estimate<Scalar, ParamDim, MeasDim, PointSet>;
+  using typename Base::Scalar, typename Base::State, typename Base::Param, typename Base::Meas, typename Base::Input;
+  using typename Base::Vector, typename Base::Points, typename Base::MeasPoints, typename Base::Mask;
+  using Base::StateDim, Base::ParamDim, Base::MeasDim;
+  /// The parameter filter: an estimate of θ measured through the m components of y, with the state
+  /// filter's sigma-point set.
+  using ParameterEstimate = Estimate<Scalar, ParamDim, MeasDim, typename Est::PointSetType>;
   static constexpr int ParameterCount = ParameterEstimate::Count;
 
   DualParameters(const Settings& s, const Param& initialParameters)
@@ -128,18 +126,18 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
   }
   // χᵢ⁺ = Φ_h(χᵢ; t, θ̂)
   template <class Step>
-  void propagatePoints(const Step& step, typename Est::Points& points) {
+  void propagatePoints(const Step& step, Points& points) {
     const Param& theta = stateFilterParameters();
-    for (int i = 0; i < Est::Count; ++i) points.col(i) = step.propagate(theta, points.col(i));
+    for (int i = 0; i < Base::Count; ++i) points.col(i) = step.propagate(theta, points.col(i));
   }
   template <class Step>
   Vector propagateMean(const Step& step, const Vector& mean) {
     return step.propagate(estimate_.mean(), mean);
   }
   // Yᵢ = g(χᵢ⁺, θ̂)
-  void measurePoints(const Model& model, const typename Est::Points& points, typename Est::MeasPoints& measured) {
+  void measurePoints(const Model& model, const Points& points, MeasPoints& measured) {
     const Param& theta = stateFilterParameters();
-    for (int i = 0; i < Est::Count; ++i) measured.col(i) = model.measurement(points.col(i), theta);
+    for (int i = 0; i < Base::Count; ++i) measured.col(i) = model.measurement(points.col(i), theta);
   }
 
   // The parameters first, into their candidates, then the state; the engine's correctAndCommit commits
@@ -165,7 +163,7 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
     }
     return taken(state) ? combineTaken(state, parameters) : state;
   }
-  Status correctParameters(const Correction<Model, Settings, Est>&) { return Status::Ok; }
+  Status correctParameters(const typename Base::CorrectionOf&) { return Status::Ok; }
   void constrainMean(Vector&) {}
 
   void commitPrediction() {
@@ -299,17 +297,11 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
 /// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled>
 class DualUkf
-    : public detail::UnscentedEngine<
-          DualUkf<Model_, Integrator_, PointSet>, Model_, Integrator_, DualUkfSettingsFor<Model_>,
-          detail::DualParameters<Model_, Integrator_, DualUkfSettingsFor<Model_>,
-                                 detail::Estimate<typename Model_::Scalar, Model_::StateDim, Model_::MeasDim, PointSet>,
-                                 PointSet>,
-          Model_::StateDim, PointSet> {
+    : public detail::EngineOf<DualUkf<Model_, Integrator_, PointSet>, Model_, Integrator_, DualUkfSettingsFor<Model_>,
+                              detail::DualParameters, Model_::StateDim, PointSet> {
   static_assert(checkModel<Model_, 1>());
-  using Est = detail::Estimate<typename Model_::Scalar, Model_::StateDim, Model_::MeasDim, PointSet>;
-  using Policy = detail::DualParameters<Model_, Integrator_, DualUkfSettingsFor<Model_>, Est, PointSet>;
-  using Engine = detail::UnscentedEngine<DualUkf, Model_, Integrator_, DualUkfSettingsFor<Model_>, Policy,
-                                         Model_::StateDim, PointSet>;
+  using Engine = typename DualUkf::UnscentedEngine;
+  using Policy = typename Engine::PolicyType;
   friend Engine;
   friend Policy;
 
@@ -330,14 +322,10 @@ class DualUkf
   /// A p × p matrix: the parameter filter's covariance.
   using ParamMatrix = Eigen::Matrix<Scalar, ParamDim, ParamDim>;
 
-#if MJUKF_EXCEPTIONS
-  /// Throws std::invalid_argument naming the setting when a setting or the initial values are invalid
-  /// (`validate`). Without exceptions, build it with `create` (detail/unscented_engine.hpp).
-  DualUkf(const Model_& model, const State& initialState, const Param& initialParameters, const Settings& settings,
-          const Integrator_& integrator = Integrator_())
-      : DualUkf(detail::throwIfInvalid(validate(initialState, initialParameters, settings)), model, initialState,
-                initialParameters, settings, integrator) {}
-#endif
+  /// Built from the model, x̂₀, θ̂₀, the settings and the stepper: throws std::invalid_argument naming
+  /// the first invalid one (`validate`). Without exceptions, build it with `create`
+  /// (detail/unscented_engine.hpp).
+  using Engine::Engine;
   /// The first invalid initial value or setting, or none: what the constructor would throw.
   static SettingsError validate(const State& initialState, const Param& initialParameters, const Settings& settings) {
     if (SettingsError e = detail::checkInitialValues(kOwner, initialState, initialParameters, settings.parameterBounds))
@@ -396,9 +384,7 @@ class DualUkf
  private:
   static constexpr const char* kOwner = "mjukf::DualUkf";
 
-  DualUkf(detail::Validated, const Model_& model, const State& initialState, const Param& initialParameters,
-          const Settings& settings, const Integrator_& integrator)
-      : Engine(detail::Validated{}, model, integrator, settings, initialState, Policy(settings, initialParameters)) {}
+  static const State& initialMean(const State& initialState, const Param&) { return initialState; }
 };
 
 }  // namespace mjukf

@@ -37,14 +37,14 @@ namespace detail {
 /// a policy supplies).
 template <class Model, class Integrator, class Settings, class Est>
 class AugmentedParameters : public ParameterPolicy<Model, Integrator, Settings, Est> {
- public:
-  using Scalar = typename Model::Scalar;
-  using Param = typename Model::Param;
-  using Vector = typename Est::Vector;
-  static constexpr int StateDim = Model::StateDim, ParamDim = Model::ParamDim;
+  using Base = ParameterPolicy<Model, Integrator, Settings, Est>;
 
-  explicit AugmentedParameters(const ParameterBounds<Scalar, ParamDim>& bounds)
-      : bounds_(bounds), boundsActive_(bounds.active()) {}
+ public:
+  using typename Base::Param, typename Base::Points, typename Base::MeasPoints, typename Base::Vector;
+  using Base::StateDim, Base::ParamDim;
+
+  AugmentedParameters(const Settings& settings, const Param&)
+      : bounds_(settings.parameterBounds), boundsActive_(settings.parameterBounds.active()) {}
 
   template <class Step>
   Status predictParameters(const Step&, const Est&) {
@@ -52,8 +52,8 @@ class AugmentedParameters : public ParameterPolicy<Model, Integrator, Settings, 
   }
   // [xᵢ; θᵢ]⁺ = [Φ_h(xᵢ; t, θᵢ); θᵢ]
   template <class Step>
-  void propagatePoints(const Step& step, typename Est::Points& points) {
-    for (int i = 0; i < Est::Count; ++i) {
+  void propagatePoints(const Step& step, Points& points) {
+    for (int i = 0; i < Base::Count; ++i) {
       const Param theta = points.col(i).template tail<ParamDim>();
       points.col(i).template head<StateDim>() = step.propagate(theta, points.col(i).template head<StateDim>());
     }
@@ -65,26 +65,26 @@ class AugmentedParameters : public ParameterPolicy<Model, Integrator, Settings, 
     return next;
   }
   // Yᵢ = g(xᵢ, θᵢ) of zᵢ = [xᵢ; θᵢ]
-  void measurePoints(const Model& model, const typename Est::Points& points, typename Est::MeasPoints& measured) {
-    for (int i = 0; i < Est::Count; ++i)
+  void measurePoints(const Model& model, const Points& points, MeasPoints& measured) {
+    for (int i = 0; i < Base::Count; ++i)
       measured.col(i) =
           model.measurement(points.col(i).template head<StateDim>(), points.col(i).template tail<ParamDim>());
   }
   template <class Engine>
-  Status update(Engine& engine, const typename Model::Meas& y, const typename Est::Mask* present) {
+  Status update(Engine& engine, const typename Base::Meas& y, const typename Base::Mask* present) {
     return engine.correctState(y, present);
   }
-  Status correctParameters(const Correction<Model, Settings, Est>&) { return Status::Ok; }
+  Status correctParameters(const typename Base::CorrectionOf&) { return Status::Ok; }
   // The θ block of every committed mean within the bounds (parameter_bounds.hpp).
   void constrainMean(Vector& z) {
     if (boundsActive_) bounds_.clamp(z.template tail<ParamDim>());
   }
   void commitPrediction() {}
   void commitCorrection() {}
-  void commitOpenLoop(Scalar) {}
+  void commitOpenLoop(typename Base::Scalar) {}
 
  private:
-  ParameterBounds<Scalar, ParamDim> bounds_;
+  ParameterBounds<typename Base::Scalar, ParamDim> bounds_;
   bool boundsActive_;
 };
 
@@ -102,20 +102,12 @@ class AugmentedParameters : public ParameterPolicy<Model, Integrator, Settings, 
 /// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled>
 class JointUkf
-    : public detail::UnscentedEngine<
-          JointUkf<Model_, Integrator_, PointSet>, Model_, Integrator_, JointUkfSettingsFor<Model_>,
-          detail::AugmentedParameters<Model_, Integrator_, JointUkfSettingsFor<Model_>,
-                                      detail::Estimate<typename Model_::Scalar, Model_::StateDim + Model_::ParamDim,
-                                                       Model_::MeasDim, PointSet>>,
-          Model_::StateDim + Model_::ParamDim, PointSet> {
+    : public detail::EngineOf<JointUkf<Model_, Integrator_, PointSet>, Model_, Integrator_, JointUkfSettingsFor<Model_>,
+                              detail::AugmentedParameters, Model_::StateDim + Model_::ParamDim, PointSet> {
   static_assert(checkModel<Model_, 1>());
-  using Est =
-      detail::Estimate<typename Model_::Scalar, Model_::StateDim + Model_::ParamDim, Model_::MeasDim, PointSet>;
-  using Policy = detail::AugmentedParameters<Model_, Integrator_, JointUkfSettingsFor<Model_>, Est>;
-  using Engine = detail::UnscentedEngine<JointUkf, Model_, Integrator_, JointUkfSettingsFor<Model_>, Policy,
-                                         Model_::StateDim + Model_::ParamDim, PointSet>;
+  using Engine = typename JointUkf::UnscentedEngine;
   friend Engine;
-  friend Policy;
+  friend typename Engine::PolicyType;
 
  public:
   /// The model's scalar and vector types (see the engine, detail/unscented_engine.hpp).
@@ -133,14 +125,10 @@ class JointUkf
   /// The covariance of [x; θ].
   using AugmentedMatrix = Eigen::Matrix<Scalar, AugmentedDim, AugmentedDim>;
 
-#if MJUKF_EXCEPTIONS
-  /// Throws std::invalid_argument naming the setting when a setting or the initial values are invalid
-  /// (`validate`). Without exceptions, build it with `create` (detail/unscented_engine.hpp).
-  JointUkf(const Model_& model, const State& initialState, const Param& initialParameters, const Settings& settings,
-           const Integrator_& integrator = Integrator_())
-      : JointUkf(detail::throwIfInvalid(validate(initialState, initialParameters, settings)), model, initialState,
-                 initialParameters, settings, integrator) {}
-#endif
+  /// Built from the model, x̂₀, θ̂₀, the settings and the stepper: throws std::invalid_argument naming
+  /// the first invalid one (`validate`). Without exceptions, build it with `create`
+  /// (detail/unscented_engine.hpp).
+  using Engine::Engine;
   /// The first invalid initial value or setting, or none: what the constructor would throw.
   static SettingsError validate(const State& initialState, const Param& initialParameters, const Settings& settings) {
     if (SettingsError e = detail::checkInitialValues(kOwner, initialState, initialParameters, settings.parameterBounds))
@@ -177,11 +165,9 @@ class JointUkf
  private:
   static constexpr const char* kOwner = "mjukf::JointUkf";
 
-  JointUkf(detail::Validated, const Model_& model, const State& initialState, const Param& initialParameters,
-           const Settings& settings, const Integrator_& integrator)
-      : Engine(detail::Validated{}, model, integrator, settings, augment(initialState, initialParameters),
-               Policy(settings.parameterBounds)) {}
-
+  static AugmentedState initialMean(const State& initialState, const Param& initialParameters) {
+    return augment(initialState, initialParameters);
+  }
   // [x; θ]
   static AugmentedState augment(const State& x, const Param& theta) {
     AugmentedState z;

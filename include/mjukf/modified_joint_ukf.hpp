@@ -74,14 +74,12 @@ namespace detail {
 /// lists what a policy supplies.
 template <class Model, class Integrator, class Settings, class Est>
 class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settings, Est> {
+  using Base = ParameterPolicy<Model, Integrator, Settings, Est>;
+
  public:
-  using Scalar = typename Model::Scalar;
-  using State = typename Model::State;
-  using Param = typename Model::Param;
-  using Meas = typename Model::Meas;
-  using Vector = typename Est::Vector;
-  static constexpr int StateDim = Model::StateDim, ParamDim = Model::ParamDim, MeasDim = Model::MeasDim;
-  static constexpr int Count = Est::Count;
+  using typename Base::Scalar, typename Base::State, typename Base::Param, typename Base::Meas, typename Base::Vector;
+  using typename Base::Points, typename Base::MeasPoints, typename Base::Mask;
+  using Base::StateDim, Base::ParamDim, Base::MeasDim, Base::Count;
   static_assert(Count == 2 * StateDim + 1,
                 "ModifiedJointUkf needs van der Merwe's 2n + 1 sigma points: eqs. 8-10 pair each with its own "
                 "theta_i (the cubature set has 2n)");
@@ -127,7 +125,7 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   // χᵢ⁺ = Φ_h(χᵢ; t, θᵢ), each point with its own θᵢ. The automatic modes then follow W = ∂x̂/∂θ̂
   // about point 0 (χ₀ = x̂ with θ₀), whose propagation is the nominal of the forward differences.
   template <class Step>
-  void propagatePoints(const Step& step, typename Est::Points& points) {
+  void propagatePoints(const Step& step, Points& points) {
     const State x0 = points.col(0);
     for (int i = 0; i < Count; ++i) {
       const Param theta = parameterPoints_.col(i);
@@ -145,18 +143,18 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
     return step.propagate(parameters_, mean);
   }
   // Yᵢ = g(χᵢ⁺, θᵢ); points drawn afresh are paired with the θᵢ in order.
-  void measurePoints(const Model& model, const typename Est::Points& points, typename Est::MeasPoints& measured) {
+  void measurePoints(const Model& model, const Points& points, MeasPoints& measured) {
     for (int i = 0; i < Count; ++i) measured.col(i) = model.measurement(points.col(i), parameterPoints_.col(i));
   }
   template <class Engine>
-  Status update(Engine& engine, const Meas& y, const typename Est::Mask* present) {
+  Status update(Engine& engine, const Meas& y, const Mask* present) {
     return engine.correctState(y, present);
   }
 
   // Eqs. 9–10 into the candidates, from the Yᵢ of the state's correction:
   //   θᵢ ← θ̂ − ξ T (y − Yᵢ),   θ̂ ← (1 / (2n + 1)) Σ θᵢ,
   // with one ξ (the paper) or, in the automatic modes, T and one ξ per parameter from the sensitivities.
-  Status correctParameters(const Correction<Model, Settings, Est>& c) {
+  Status correctParameters(const typename Base::CorrectionOf& c) {
     const Settings& s = c.settings;
     if (automatic_) {
       const Scalar memory = s.adaptiveScaling ? s.convergenceTime : std::numeric_limits<Scalar>::infinity();
@@ -270,19 +268,13 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
 /// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled>
 class ModifiedJointUkf
-    : public detail::UnscentedEngine<
-          ModifiedJointUkf<Model_, Integrator_, PointSet>, Model_, Integrator_, ModifiedJointUkfSettingsFor<Model_>,
-          detail::ModifiedJointParameters<
-              Model_, Integrator_, ModifiedJointUkfSettingsFor<Model_>,
-              detail::Estimate<typename Model_::Scalar, Model_::StateDim, Model_::MeasDim, PointSet>>,
-          Model_::StateDim, PointSet> {
+    : public detail::EngineOf<ModifiedJointUkf<Model_, Integrator_, PointSet>, Model_, Integrator_,
+                              ModifiedJointUkfSettingsFor<Model_>, detail::ModifiedJointParameters, Model_::StateDim,
+                              PointSet> {
   static_assert(checkModel<Model_, 1>());
-  using Est = detail::Estimate<typename Model_::Scalar, Model_::StateDim, Model_::MeasDim, PointSet>;
-  using Policy = detail::ModifiedJointParameters<Model_, Integrator_, ModifiedJointUkfSettingsFor<Model_>, Est>;
-  using Engine = detail::UnscentedEngine<ModifiedJointUkf, Model_, Integrator_, ModifiedJointUkfSettingsFor<Model_>,
-                                         Policy, Model_::StateDim, PointSet>;
+  using Engine = typename ModifiedJointUkf::UnscentedEngine;
   friend Engine;
-  friend Policy;
+  friend typename Engine::PolicyType;
 
  public:
   /// The model's scalar and vector types (see the engine, detail/unscented_engine.hpp).
@@ -302,14 +294,10 @@ class ModifiedJointUkf
   /// What the automatic modes follow about θ (parameter_sensitivity.hpp): W, ψ and the information.
   using Sensitivity = ParameterSensitivity<Scalar, StateDim, MeasDim, ParamDim>;
 
-#if MJUKF_EXCEPTIONS
-  /// Throws std::invalid_argument naming the setting when a setting or the initial values are invalid
-  /// (`validate`). Without exceptions, build it with `create` (detail/unscented_engine.hpp).
-  ModifiedJointUkf(const Model_& model, const State& initialState, const Param& initialParameters,
-                   const Settings& settings, const Integrator_& integrator = Integrator_())
-      : ModifiedJointUkf(detail::throwIfInvalid(validate(initialState, initialParameters, settings)), model,
-                         initialState, initialParameters, settings, integrator) {}
-#endif
+  /// Built from the model, x̂₀, θ̂₀, the settings and the stepper: throws std::invalid_argument naming
+  /// the first invalid one (`validate`). Without exceptions, build it with `create`
+  /// (detail/unscented_engine.hpp).
+  using Engine::Engine;
   /// The first invalid initial value or setting, or none: what the constructor would throw.
   static SettingsError validate(const State& initialState, const Param& initialParameters, const Settings& settings) {
     if (SettingsError e = detail::checkInitialValues(kOwner, initialState, initialParameters, settings.parameterBounds))
@@ -382,9 +370,7 @@ class ModifiedJointUkf
  private:
   static constexpr const char* kOwner = "mjukf::ModifiedJointUkf";
 
-  ModifiedJointUkf(detail::Validated, const Model_& model, const State& initialState, const Param& initialParameters,
-                   const Settings& settings, const Integrator_& integrator)
-      : Engine(detail::Validated{}, model, integrator, settings, initialState, Policy(settings, initialParameters)) {}
+  static const State& initialMean(const State& initialState, const Param&) { return initialState; }
 };
 
 }  // namespace mjukf

@@ -227,8 +227,10 @@ class ParameterSensitivity {
   bool candidateStale_ = false;
   Meas noiseWeights_ = Meas::Ones();  // 1 / √Rⱼⱼ
   Scalar forgettingInterval_ = -1, forgettingMemory_ = -1, forgetting_ = 1;  // λ of the last interval
-  MeasSensitivity whitened_;
-  Transformation gain_;
+  // Workspace, zeroed once so that copying an object (a filter is built from a copy of its policy)
+  // copies no indeterminate values.
+  MeasSensitivity whitened_ = MeasSensitivity::Zero();
+  Transformation gain_ = Transformation::Zero();
 };
 
 }  // namespace mjukf

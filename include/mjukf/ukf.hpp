@@ -31,12 +31,12 @@ namespace detail {
 /// lists what a policy supplies).
 template <class Model, class Integrator, class Settings, class Est>
 class KnownParameters : public ParameterPolicy<Model, Integrator, Settings, Est> {
- public:
-  using Scalar = typename Model::Scalar;
-  using Param = typename Model::Param;
-  using Vector = typename Est::Vector;
+  using Base = ParameterPolicy<Model, Integrator, Settings, Est>;
 
-  explicit KnownParameters(const Param& parameters) : parameters_(parameters) {}
+ public:
+  using typename Base::Param, typename Base::Points, typename Base::MeasPoints, typename Base::Vector;
+
+  KnownParameters(const Settings&, const Param& parameters) : parameters_(parameters) {}
   const Param& parameters() const { return parameters_; }
   void reset(const Param& parameters) { parameters_ = parameters; }
 
@@ -46,26 +46,26 @@ class KnownParameters : public ParameterPolicy<Model, Integrator, Settings, Est>
   }
   // χᵢ⁺ = Φ_h(χᵢ; t, θ)
   template <class Step>
-  void propagatePoints(const Step& step, typename Est::Points& points) {
-    for (int i = 0; i < Est::Count; ++i) points.col(i) = step.propagate(parameters_, points.col(i));
+  void propagatePoints(const Step& step, Points& points) {
+    for (int i = 0; i < Base::Count; ++i) points.col(i) = step.propagate(parameters_, points.col(i));
   }
   template <class Step>
   Vector propagateMean(const Step& step, const Vector& mean) {
     return step.propagate(parameters_, mean);
   }
   // Yᵢ = g(χᵢ⁺, θ)
-  void measurePoints(const Model& model, const typename Est::Points& points, typename Est::MeasPoints& measured) {
-    for (int i = 0; i < Est::Count; ++i) measured.col(i) = model.measurement(points.col(i), parameters_);
+  void measurePoints(const Model& model, const Points& points, MeasPoints& measured) {
+    for (int i = 0; i < Base::Count; ++i) measured.col(i) = model.measurement(points.col(i), parameters_);
   }
   template <class Engine>
-  Status update(Engine& engine, const typename Model::Meas& y, const typename Est::Mask* present) {
+  Status update(Engine& engine, const typename Base::Meas& y, const typename Base::Mask* present) {
     return engine.correctState(y, present);
   }
-  Status correctParameters(const Correction<Model, Settings, Est>&) { return Status::Ok; }
+  Status correctParameters(const typename Base::CorrectionOf&) { return Status::Ok; }
   void constrainMean(Vector&) {}
   void commitPrediction() {}
   void commitCorrection() {}
-  void commitOpenLoop(Scalar) {}
+  void commitOpenLoop(typename Base::Scalar) {}
 
  private:
   Param parameters_;
@@ -84,19 +84,12 @@ class KnownParameters : public ParameterPolicy<Model, Integrator, Settings, Est>
 /// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
 /// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled>
-class Ukf : public detail::UnscentedEngine<
-                Ukf<Model_, Integrator_, PointSet>, Model_, Integrator_, UkfSettingsFor<Model_>,
-                detail::KnownParameters<Model_, Integrator_, UkfSettingsFor<Model_>,
-                                        detail::Estimate<typename Model_::Scalar, Model_::StateDim, Model_::MeasDim,
-                                                         PointSet>>,
-                Model_::StateDim, PointSet> {
+class Ukf : public detail::EngineOf<Ukf<Model_, Integrator_, PointSet>, Model_, Integrator_, UkfSettingsFor<Model_>,
+                                    detail::KnownParameters, Model_::StateDim, PointSet> {
   static_assert(checkModel<Model_>());
-  using Est = detail::Estimate<typename Model_::Scalar, Model_::StateDim, Model_::MeasDim, PointSet>;
-  using Policy = detail::KnownParameters<Model_, Integrator_, UkfSettingsFor<Model_>, Est>;
-  using Engine = detail::UnscentedEngine<Ukf, Model_, Integrator_, UkfSettingsFor<Model_>, Policy, Model_::StateDim,
-                                         PointSet>;
+  using Engine = typename Ukf::UnscentedEngine;
   friend Engine;
-  friend Policy;
+  friend typename Engine::PolicyType;
 
  public:
   /// The model's scalar and vector types (see the engine, detail/unscented_engine.hpp).
@@ -108,14 +101,10 @@ class Ukf : public detail::UnscentedEngine<
   /// The number of sigma points: 2n + 1 (van der Merwe's set, the default) or 2n (cubature).
   using Engine::SigmaPointCount;
 
-#if MJUKF_EXCEPTIONS
-  /// Throws std::invalid_argument naming the setting when a setting or the initial values are invalid
-  /// (`validate`). Without exceptions, build it with `create` (detail/unscented_engine.hpp).
-  Ukf(const Model_& model, const State& initialState, const Param& parameters, const Settings& settings,
-      const Integrator_& integrator = Integrator_())
-      : Ukf(detail::throwIfInvalid(validate(initialState, parameters, settings)), model, initialState, parameters,
-            settings, integrator) {}
-#endif
+  /// Built from the model, x̂₀, the fixed parameters, the settings and the stepper: throws
+  /// std::invalid_argument naming the first invalid one (`validate`). Without exceptions, build it with
+  /// `create` (detail/unscented_engine.hpp).
+  using Engine::Engine;
   /// The first invalid initial value or setting, or none: what the constructor would throw.
   static SettingsError validate(const State& initialState, const Param& parameters, const Settings& settings) {
     if (SettingsError e = detail::requireFinite(kOwner, "initialState", initialState)) return e;
@@ -148,9 +137,7 @@ class Ukf : public detail::UnscentedEngine<
  private:
   static constexpr const char* kOwner = "mjukf::Ukf";
 
-  Ukf(detail::Validated, const Model_& model, const State& initialState, const Param& parameters,
-      const Settings& settings, const Integrator_& integrator)
-      : Engine(detail::Validated{}, model, integrator, settings, initialState, Policy(parameters)) {}
+  static const State& initialMean(const State& initialState, const Param&) { return initialState; }
 };
 
 }  // namespace mjukf

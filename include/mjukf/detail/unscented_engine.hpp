@@ -191,6 +191,7 @@ class CovarianceGuard {
 template <class Scalar, int L, int M, class PointSet = MerweScaled>
 class Estimate {
  public:
+  using PointSetType = PointSet;
   using SigmaPoints = typename PointSet::template Set<Scalar, L>;
   static constexpr int Count = SigmaPoints::Count;
   using Vector = Eigen::Matrix<Scalar, L, 1>;
@@ -450,9 +451,23 @@ constexpr bool checkParameterPolicy() {
   return true;
 }
 
-// The types a policy is checked with; a policy derives from this to declare them.
+// The base of every parameter policy: the types its hooks use, and the types it is checked with. It
+// supplies no hook.
 template <class Model, class Integrator, class Settings, class Est>
 struct ParameterPolicy {
+  using Scalar = typename Model::Scalar;
+  using State = typename Model::State;
+  using Param = typename Model::Param;
+  using Meas = typename Model::Meas;
+  using Input = typename Model::Input;
+  using Vector = typename Est::Vector;    // the estimated vector (x, or [x; θ])
+  using Points = typename Est::Points;    // its sigma points, one per column
+  using MeasPoints = typename Est::MeasPoints;
+  using Mask = typename Est::Mask;
+  using CorrectionOf = Correction<Model, Settings, Est>;
+  static constexpr int StateDim = Model::StateDim, ParamDim = Model::ParamDim, MeasDim = Model::MeasDim;
+  static constexpr int Count = Est::Count;  // the number of sigma points
+
   using CheckModel = Model;
   using CheckEstimate = Est;
   using CheckStep = TimeStep<Model, Integrator, HeldInput<Model>, Settings>;
@@ -567,6 +582,16 @@ class UnscentedEngine {
     });
   }
 
+#if MJUKF_EXCEPTIONS
+  /// The filter built from these initial values and settings; throws std::invalid_argument naming the
+  /// first invalid one (Filter::validate). Without exceptions, build it with `create`. For Ukf,
+  /// `initialParameters` are its fixed parameters. Each filter inherits this constructor.
+  UnscentedEngine(const Model& model, const State& initialState, const Param& initialParameters,
+                  const Settings& settings, const Integrator& integrator = Integrator())
+      : UnscentedEngine(throwIfInvalid(Filter::validate(initialState, initialParameters, settings)), model,
+                        initialState, initialParameters, settings, integrator) {}
+#endif
+
   /// Innovation, its covariance and the NIS of the last successful measurement update.
   const Diagnostics& lastUpdate() const { return estimate_.diagnostics(); }
   /// True when the sigma points of the last time update are still the filter's.
@@ -588,6 +613,7 @@ class UnscentedEngine {
   using Mask = MeasurementMask<MeasDim>;
   static_assert(checkParameterPolicy<Policy>());
   friend Policy;
+  using PolicyType = Policy;
 
   // The settings every filter shares, checked in this order after the filter's own initial values:
   // the sigma points, P₀, Q, R, the repair and the gate. The first error, naming the setting, or none.
@@ -601,16 +627,17 @@ class UnscentedEngine {
     return validateGate(owner, settings.gate);
   }
 
-  // Starts from `initialMean` and P₀, both accepted by the filter's validate() (which ends with
-  // validateSettings), with the policy the filter built: nothing here can fail.
-  UnscentedEngine(Validated, const Model& model, const Integrator& integrator, const Settings& settings,
-                  const Vector& initialMean, const Policy& policy)
+  // The filter from values its validate() accepted (it ends with validateSettings): the estimate starts
+  // from Filter::initialMean(x̂₀, θ̂₀) and P₀, the policy from (settings, θ̂₀); nothing here can fail.
+  UnscentedEngine(Validated, const Model& model, const State& initialState, const Param& initialParameters,
+                  const Settings& settings, const Integrator& integrator)
       : model_(model),
         integrator_(integrator),
         settings_(settings),
         estimate_(Validated{}, settings.sigmaPoints),
-        policy_(policy) {
-    estimate_.assign(initialMean, settings.initialCovariance);  // symmetrised, as every committed P is
+        policy_(settings, initialParameters) {
+    // symmetrised, as every committed P is
+    estimate_.assign(Filter::initialMean(initialState, initialParameters), settings.initialCovariance);
   }
 
   // The covariance argument of reset() checked like P₀; reset() changes nothing when it fails. The mean
@@ -712,5 +739,13 @@ class UnscentedEngine {
   static inline const Input noInput_{};
   /// \endcond
 };
+
+// The engine of filter `Filter` over `Model`, with the parameter policy template `PolicyOf` (given the
+// model, stepper, settings and estimate) and an estimate of dimension L drawn with `PointSet`.
+template <class Filter, class Model, class Integrator, class Settings, template <class, class, class, class> class PolicyOf,
+          int L, class PointSet>
+using EngineOf = UnscentedEngine<
+    Filter, Model, Integrator, Settings,
+    PolicyOf<Model, Integrator, Settings, Estimate<typename Model::Scalar, L, Model::MeasDim, PointSet>>, L, PointSet>;
 
 }  // namespace mjukf::detail
