@@ -13,6 +13,14 @@ namespace mjukf {
   template class MerweScaledSigmaPoints<Scalar, 6>;                                                  \
   template class detail::Estimate<Scalar, 4, 4>;                                                     \
   template class detail::Estimate<Scalar, 3, 2, Cubature>;                                           \
+  template class detail::Estimate<Scalar, 4, 4, MerweScaled, SquareRootCovariance>;                  \
+  template class detail::Estimate<Scalar, 1, 2, Cubature, SquareRootCovariance>;                     \
+  template class Ukf<models::CoupledTank<Scalar>, ITrBdf2<Scalar>, MerweScaled, SquareRootCovariance>;        \
+  template class JointUkf<models::FlexibleJoint<Scalar>, ITrBdf2<Scalar>, MerweScaled, SquareRootCovariance>; \
+  template class ModifiedJointUkf<models::FlexibleJoint<Scalar>, ITrBdf2<Scalar>, MerweScaled,                \
+                                  SquareRootCovariance>;                                                      \
+  template class DualUkf<models::CoupledTank<Scalar>, ITrBdf2<Scalar>, MerweScaled, SquareRootCovariance>;    \
+  template class JointUkf<models::CoupledTank<Scalar>, Rk4<Scalar>, Cubature, SquareRootCovariance>;          \
   template class CubatureSigmaPoints<Scalar, 3>;                                                     \
   template class Ukf<models::CoupledTank<Scalar>, Rk4<Scalar>, Cubature>;                            \
   template class JointUkf<models::FlexibleJoint<Scalar>, Rk4<Scalar>, Cubature>;                     \

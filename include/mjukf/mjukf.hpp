@@ -4,6 +4,7 @@
 /// Umbrella header: the whole core API of mjukf. The paper's experiments, schedule and RMSE are a
 /// layer of their own, `mjukf/paper/paper.hpp`.
 
+#include "mjukf/covariance_form.hpp"
 #include "mjukf/diagnostics.hpp"
 #include "mjukf/dual_ukf.hpp"
 #include "mjukf/filter_settings.hpp"

@@ -266,11 +266,16 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
 ///
 /// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
 /// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
-template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled>
+/// `PointSet` is the sigma-point set (sigma_points.hpp; 2n + 1 points) and `Form` the covariance form
+/// (covariance_form.hpp): `FullCovariance`, the default, or `SquareRootCovariance`. Eqs. 9–10 touch
+/// no covariance, so they are the same in both forms; the automatic modes read U and the factor S of
+/// P_yy, which both forms provide.
+template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled,
+          class Form = FullCovariance>
 class ModifiedJointUkf
-    : public detail::EngineOf<ModifiedJointUkf<Model_, Integrator_, PointSet>, Model_, Integrator_,
+    : public detail::EngineOf<ModifiedJointUkf<Model_, Integrator_, PointSet, Form>, Model_, Integrator_,
                               ModifiedJointUkfSettingsFor<Model_>, detail::ModifiedJointParameters, Model_::StateDim,
-                              PointSet> {
+                              PointSet, Form> {
   static_assert(checkModel<Model_, 1>());
   using Engine = typename ModifiedJointUkf::UnscentedEngine;
   friend Engine;

@@ -83,9 +83,12 @@ class KnownParameters : public ParameterPolicy<Model, Integrator, Settings, Est>
 ///
 /// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
 /// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
-template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled>
-class Ukf : public detail::EngineOf<Ukf<Model_, Integrator_, PointSet>, Model_, Integrator_, UkfSettingsFor<Model_>,
-                                    detail::KnownParameters, Model_::StateDim, PointSet> {
+/// `PointSet` is the sigma-point set (sigma_points.hpp) and `Form` the covariance form
+/// (covariance_form.hpp): `FullCovariance`, the default, or `SquareRootCovariance`.
+template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled,
+          class Form = FullCovariance>
+class Ukf : public detail::EngineOf<Ukf<Model_, Integrator_, PointSet, Form>, Model_, Integrator_,
+                                    UkfSettingsFor<Model_>, detail::KnownParameters, Model_::StateDim, PointSet, Form> {
   static_assert(checkModel<Model_>());
   using Engine = typename Ukf::UnscentedEngine;
   friend Engine;
