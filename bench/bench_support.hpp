@@ -52,8 +52,8 @@ struct Counting : Base {
     ++counts->input;
     return Base::input(t);
   }
-  typename Base::State derivative(typename Base::Scalar t, const typename Base::State& x,
-                                  const typename Base::Input& u, const typename Base::Param& theta) const {
+  typename Base::State derivative(typename Base::Scalar t, const typename Base::State& x, const typename Base::Input& u,
+                                  const typename Base::Param& theta) const {
     ++counts->derivative;
     return Base::derivative(t, x, u, theta);
   }
@@ -92,23 +92,18 @@ FilterType<Kind, Model, Form> makeFilter(const Model& model = Model()) {
   using Filter = FilterType<Kind, Model, Form>;
   const auto x0 = Experiment::initialState();
   if constexpr (Kind == FilterKind::Ukf)
-    return Filter(model, x0, Experiment::Model::trueParameters(),
-                                   Experiment::ukf());
+    return Filter(model, x0, Experiment::Model::trueParameters(), Experiment::ukf());
   else if constexpr (Kind == FilterKind::Jukf)
-    return Filter(model, x0, Experiment::initialParameters(),
-                                   Experiment::jointUkf());
+    return Filter(model, x0, Experiment::initialParameters(), Experiment::jointUkf());
   else if constexpr (Kind == FilterKind::Mjukf)
-    return Filter(model, x0, Experiment::initialParameters(),
-                                   Experiment::modifiedJointUkf());
+    return Filter(model, x0, Experiment::initialParameters(), Experiment::modifiedJointUkf());
   else if constexpr (Kind == FilterKind::MjukfAuto) {
     auto settings = Experiment::modifiedJointUkf();
     settings.automaticTransformation = true;
     settings.adaptiveScaling = true;
     return Filter(model, x0, Experiment::initialParameters(), settings);
-  }
-  else
-    return Filter(model, x0, Experiment::initialParameters(),
-                                   Experiment::dualUkf());
+  } else
+    return Filter(model, x0, Experiment::initialParameters(), Experiment::dualUkf());
 }
 
 /// Measurements y_k = x(k h) + v_k of the plant with its true parameters, simulated with I-TR-BDF2

@@ -93,9 +93,12 @@ struct Snapshot {
   Matrix parameterNis;
 
   explicit Snapshot(const Filter& f)
-      : state(f.state()), covariance(f.covariance()), parameters(f.parameters()),
+      : state(f.state()),
+        covariance(f.covariance()),
+        parameters(f.parameters()),
         innovation(f.lastUpdate().innovation),
-        innovationCovarianceDiagonal(f.lastUpdate().innovationCovariance.diagonal()), nis(f.lastUpdate().nis),
+        innovationCovarianceDiagonal(f.lastUpdate().innovationCovariance.diagonal()),
+        nis(f.lastUpdate().nis),
         hasPropagatedPoints(f.hasPropagatedPoints()) {
     if constexpr (IsModifiedJoint<Filter>::value) {
       parameterPoints = f.parameterPoints();
@@ -250,13 +253,13 @@ TYPED_TEST(FailurePolicy, ModelReturnsNonFiniteValues) {
   expectRefusedAndUnchanged(filter, Status::NonFiniteResult,
                             refuseWith(ToyModel::BlowUp::Derivative, [](auto& f) { return f.timeUpdate(0.0, 0.01); }));
   ASSERT_EQ(filter.timeUpdate(0.0, 0.01), Status::Ok);
-  expectRefusedAndUnchanged(
-      filter, Status::NonFiniteResult,
-      refuseWith(ToyModel::BlowUp::Derivative, [](auto& f) { return f.propagateMean(0.0, 0.01); }));
+  expectRefusedAndUnchanged(filter, Status::NonFiniteResult, refuseWith(ToyModel::BlowUp::Derivative, [](auto& f) {
+                              return f.propagateMean(0.0, 0.01);
+                            }));
   ASSERT_EQ(filter.timeUpdate(0.0, 0.01), Status::Ok);
-  expectRefusedAndUnchanged(filter, Status::NonFiniteResult,
-                            refuseWith(ToyModel::BlowUp::Measurement,
-                                       [](auto& f) { return f.measurementUpdate(ToyModel::Meas(0.3)); }));
+  expectRefusedAndUnchanged(filter, Status::NonFiniteResult, refuseWith(ToyModel::BlowUp::Measurement, [](auto& f) {
+                              return f.measurementUpdate(ToyModel::Meas(0.3));
+                            }));
 }
 
 TYPED_TEST(FailurePolicy, CovarianceWithoutCholeskyFactor) {
@@ -435,7 +438,7 @@ TEST(DualUkfFailurePolicy, MaskedUpdateEqualsTheReducedModel) {
     EXPECT_NEAR(full.lastParameterUpdate().nis, reduced.lastParameterUpdate().nis,
                 1e-10 * reduced.lastParameterUpdate().nis);
     EXPECT_EQ(full.lastParameterUpdate().innovation(1), 0.0);  // the missing component, NaN in y
-    EXPECT_GT(std::abs(full.parameters()(0) - 2.0), 1e-3);    // the parameter did move
+    EXPECT_GT(std::abs(full.parameters()(0) - 2.0), 1e-3);     // the parameter did move
   }
 }
 
@@ -505,8 +508,8 @@ TEST(DualUkfFailurePolicy, FloatRefusalsLeaveItUnchanged) {
     for (const auto mode : {Model::BlowUp::Derivative, Model::BlowUp::Measurement}) {
       expectRefusedAndUnchanged(filter, Status::NonFiniteResult, [&blowUp, mode](auto& f) {
         blowUp = mode;
-        const Status s = mode == Model::BlowUp::Measurement ? f.measurementUpdate(Model::Meas(0.3f))
-                                                             : f.timeUpdate(0.01f, 0.01f);
+        const Status s =
+            mode == Model::BlowUp::Measurement ? f.measurementUpdate(Model::Meas(0.3f)) : f.timeUpdate(0.01f, 0.01f);
         blowUp = Model::BlowUp::Never;
         return s;
       });

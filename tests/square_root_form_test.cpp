@@ -76,7 +76,7 @@ double relative(const A& sr, const B& full) {
 // The largest relative differences of a run, and the bound accumulated along it.
 struct Comparison {
   double state = 0, covariance = 0, parameters = 0, parameterCovariance = 0;
-  double bound = 0;             // Σ over the steps of what each step may add (the top of the file)
+  double bound = 0;                // Σ over the steps of what each step may add (the top of the file)
   double largestCancellation = 1;  // max r_k
   long updates = 0, openLoop = 0;
   long statusMismatches = 0;
@@ -86,10 +86,10 @@ struct Comparison {
 
 // What a run does on top of the paper's schedule.
 struct Variant {
-  int maskEvery = 0;        // every maskEvery-th update: component 0 missing (and NaN in y)
-  bool redraw = false;      // redrawPointsForUpdate
-  double gateNoise = 0;     // > 0: R = gateNoise I and the χ²(0.99) gate
-  bool bounds = false;      // parameter bounds [θ̂₀ / 2, 3 θ̂₀ / 2] (JUKF, MJUKF, dual)
+  int maskEvery = 0;     // every maskEvery-th update: component 0 missing (and NaN in y)
+  bool redraw = false;   // redrawPointsForUpdate
+  double gateNoise = 0;  // > 0: R = gateNoise I and the χ²(0.99) gate
+  bool bounds = false;   // parameter bounds [θ̂₀ / 2, 3 θ̂₀ / 2] (JUKF, MJUKF, dual)
   std::string name() const {
     std::string n;
     if (maskEvery) n += " masked";
@@ -122,7 +122,8 @@ void record(Comparison& c, const Full& full, const Sr& sr) {
   c.covariance = std::max(c.covariance, relative(sr.covariance(), full.covariance()));
   c.parameters = std::max(c.parameters, relative(sr.parameters(), full.parameters()));
   if constexpr (IsDual<Full>::value)
-    c.parameterCovariance = std::max(c.parameterCovariance, relative(sr.parameterCovariance(), full.parameterCovariance()));
+    c.parameterCovariance =
+        std::max(c.parameterCovariance, relative(sr.parameterCovariance(), full.parameterCovariance()));
 }
 
 // The cancellation of P⁺ = P⁻ − K P_yy Kᵀ: the largest loss of a variance, max_i P⁻_ii / P⁺_ii.
@@ -154,7 +155,8 @@ Comparison compare(Full full, Sr sr, const std::vector<Meas>& y, typename Full::
   constexpr double step = 2.0 * chain<Full>() * epsilon;
   double automatic = 0;
   if constexpr (mjukf::testing::IsModifiedJoint<Full>::value)
-    if (full.settings().automaticTransformation || full.settings().adaptiveScaling) automatic = 2.0 * std::sqrt(epsilon);
+    if (full.settings().automaticTransformation || full.settings().adaptiveScaling)
+      automatic = 2.0 * std::sqrt(epsilon);
   Comparison c;
   for (long k = 0; k + 1 < long(y.size()); ++k) {
     const Scalar t = Scalar(k) * h;
@@ -231,9 +233,9 @@ void compareAllFilters(const char* file, Variant variant = {}, bool parameterCha
     auto s = Experiment::ukf();
     variant.apply(s);
     using Full = mjukf::Ukf<Model>;
-    const auto c = compare(Full(model, x0, Model::trueParameters(), s),
-                           SquareRoot<mjukf::Ukf>::Filter<Model>(model, x0, Model::trueParameters(), s), y, h, every,
-                           variant);
+    const auto c =
+        compare(Full(model, x0, Model::trueParameters(), s),
+                SquareRoot<mjukf::Ukf>::Filter<Model>(model, x0, Model::trueParameters(), s), y, h, every, variant);
     expectWithinBound(c, label("ukf"));
     rejected += c.rejected;
   }
@@ -277,17 +279,13 @@ void compareAllFilters(const char* file, Variant variant = {}, bool parameterCha
   if (variant.gateNoise > 0) EXPECT_GT(rejected, 0) << "the gate rejected nothing: it was not tested";
 }
 
-TEST(SquareRootForm, EqualsTheFullFormOnTheRobotReference) {
-  compareAllFilters<Robot>("flexible_joint_reference.csv");
-}
+TEST(SquareRootForm, EqualsTheFullFormOnTheRobotReference) { compareAllFilters<Robot>("flexible_joint_reference.csv"); }
 
 TEST(SquareRootForm, EqualsTheFullFormOnTheRobotParameterChangeReference) {
   compareAllFilters<Robot>("flexible_joint_param_change_reference.csv", {}, true);
 }
 
-TEST(SquareRootForm, EqualsTheFullFormOnTheTankReference) {
-  compareAllFilters<Tank>("coupled_tank_reference.csv");
-}
+TEST(SquareRootForm, EqualsTheFullFormOnTheTankReference) { compareAllFilters<Tank>("coupled_tank_reference.csv"); }
 
 // Masked updates (every third, component 0 missing and NaN), points drawn afresh for every update,
 // parameter bounds that clamp (the robot's K_τ reaches its upper bound 0.15), and the χ²(0.99) gate with
@@ -356,8 +354,8 @@ FloatRun runCounting(Filter f, const std::vector<Meas>& y, typename Filter::Scal
 double normalisedStateError(const FloatRun& single, const FloatRun& reference) {
   double worst = 0;
   for (std::size_t k = 0; k < reference.states.size(); ++k)
-    worst = std::max(worst, (single.states[k] - reference.states[k]).cwiseAbs().cwiseQuotient(reference.deviations[k])
-                                .maxCoeff());
+    worst = std::max(
+        worst, (single.states[k] - reference.states[k]).cwiseAbs().cwiseQuotient(reference.deviations[k]).maxCoeff());
   return worst;
 }
 
@@ -429,11 +427,10 @@ TEST(SquareRootForm, FloatTankWithNearExactMeasurements) {
     const auto s = nearExact(Tank::modifiedJointUkf());
     const auto sf = nearExact(TankF::modifiedJointUkf());
     check("mjukf",
-          runCounting(mjukf::ModifiedJointUkf<ModelD>(ModelD(), Tank::initialState(), Tank::initialParameters(), s),
-                      yd, Tank::stepSize, 2),
-          runCounting(
-              mjukf::ModifiedJointUkf<ModelF>(ModelF(), TankF::initialState(), TankF::initialParameters(), sf), yf,
-              TankF::stepSize, 2),
+          runCounting(mjukf::ModifiedJointUkf<ModelD>(ModelD(), Tank::initialState(), Tank::initialParameters(), s), yd,
+                      Tank::stepSize, 2),
+          runCounting(mjukf::ModifiedJointUkf<ModelF>(ModelF(), TankF::initialState(), TankF::initialParameters(), sf),
+                      yf, TankF::stepSize, 2),
           runCounting(SquareRoot<mjukf::ModifiedJointUkf>::Filter<ModelF>(ModelF(), TankF::initialState(),
                                                                           TankF::initialParameters(), sf),
                       yf, TankF::stepSize, 2));
@@ -517,14 +514,15 @@ TEST(SquareRootEstimate, EveryPosteriorBranchEqualsTheFullForm) {
     EXPECT_LE(relative(sr.covariance(), full.covariance()), 2 * (7 + 3) * 2.3e-16);
     mjukf::MeasurementMask<2> secondOnly(false, true);
     for (const mjukf::MeasurementMask<2>* present : {static_cast<const mjukf::MeasurementMask<2>*>(nullptr),
-                                                      static_cast<const mjukf::MeasurementMask<2>*>(&secondOnly)}) {
+                                                     static_cast<const mjukf::MeasurementMask<2>*>(&secondOnly)}) {
       for (const bool drawn : {false, true}) {
         Eigen::Matrix3d pf, ps, po;
         Eigen::Vector3d mf, ms, mo;
         Est<mjukf::FullCovariance> f = full;
         Est<mjukf::SquareRootCovariance> s = sr, o = sr;
         ASSERT_EQ(b.correct(f, drawn, PriorPoints::Other, present, pf, mf), Status::Ok);
-        ASSERT_EQ(b.correct(s, drawn, drawn ? PriorPoints::Drawn : PriorPoints::Predicted, present, ps, ms), Status::Ok);
+        ASSERT_EQ(b.correct(s, drawn, drawn ? PriorPoints::Drawn : PriorPoints::Predicted, present, ps, ms),
+                  Status::Ok);
         ASSERT_EQ(b.correct(o, drawn, PriorPoints::Other, present, po, mo), Status::Ok);
         // One measurement step: 2 (Count + L + M) ε r, r = max P⁻_ii / P⁺_ii.
         const double r = (full.covariance().diagonal().array() / pf.diagonal().array()).maxCoeff();

@@ -8,13 +8,13 @@
 // takes fixed-size Eigen matrices, writes into its arguments and allocates nothing; each is written out
 // where Eigen's general path costs more than the arithmetic at these sizes (said at each).
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <type_traits>
 #include <utility>
 
 #include <Eigen/Core>
-#include <Eigen/Eigenvalues>  // psdSquareRoot only (construction time)
 
 namespace mjukf::detail {
 
@@ -458,20 +458,45 @@ void rightSolveLowerInPlace(const Lower& s, Cross& c) {
 }
 
 // G with G Gᵀ = Q for a symmetric positive semi-definite Q (reading its lower triangle), singular or
-// zero Q included: G = V Λ^½ from the symmetric eigendecomposition Q = V Λ Vᵀ, with the eigenvalues
-// that rounding made negative set to zero. Backward stable: ‖G Gᵀ − Q‖ ≤ p(N) ε ‖Q‖ (the
-// eigendecomposition's own error, plus the clamped eigenvalues, which are no larger). G is not
-// triangular (its rows go into the Gram factor's A, where only G Gᵀ matters). A Q with a NaN or Inf
-// gives a G of NaN. For construction time: not on the per-step path (it does not allocate at fixed
-// sizes, but costs O(N³) with a large constant).
+// zero Q included, by Cholesky with diagonal pivoting (Higham, Accuracy and Stability of Numerical
+// Algorithms, §10.3): at each step the largest remaining diagonal of the Schur complement is the pivot,
+// and the factorisation stops when it falls to N ε max(Q_jj), what is left being rounding. G is the
+// lower factor with its rows put back in Q's order (so not triangular; only G Gᵀ matters where it is
+// used). A Q with a NaN or Inf gives a G of NaN. For construction time: O(N³), not on the per-step path.
 template <class Scalar, int N>
 Eigen::Matrix<Scalar, N, N> psdSquareRoot(const Eigen::Matrix<Scalar, N, N>& q) {
   using Matrix = Eigen::Matrix<Scalar, N, N>;
-  if (!allFinite(q.template triangularView<Eigen::Lower>().toDenseMatrix()))
-    return Matrix::Constant(std::numeric_limits<Scalar>::quiet_NaN());
-  const Eigen::SelfAdjointEigenSolver<Matrix> eigen(q, Eigen::ComputeEigenvectors);
-  const Eigen::Matrix<Scalar, N, 1> roots = eigen.eigenvalues().cwiseMax(Scalar(0)).cwiseSqrt();
-  return eigen.eigenvectors() * roots.asDiagonal();
+  Matrix w = Matrix::Zero();  // the Schur complement, both triangles, rows and columns in pivot order
+  Scalar largest = Scalar(0);
+  for (int j = 0; j < N; ++j) {
+    for (int i = j; i < N; ++i) w(i, j) = w(j, i) = q(i, j);
+    largest = std::max(largest, q(j, j));
+  }
+  if (!allFinite(w)) return Matrix::Constant(std::numeric_limits<Scalar>::quiet_NaN());
+  const Scalar tolerance = Scalar(N) * std::numeric_limits<Scalar>::epsilon() * largest;
+  int order[N];  // order[i]: the row of Q that row i of the factor belongs to
+  for (int i = 0; i < N; ++i) order[i] = i;
+  Matrix l = Matrix::Zero();
+  for (int j = 0; j < N; ++j) {
+    int p = j;
+    for (int i = j + 1; i < N; ++i)
+      if (w(i, i) > w(p, p)) p = i;
+    if (!(w(p, p) > tolerance)) break;
+    if (p != j) {  // the symmetric swap of j and p in W, and of the rows of the factor so far
+      for (int k = 0; k < N; ++k) std::swap(w(j, k), w(p, k));
+      for (int k = 0; k < N; ++k) std::swap(w(k, j), w(k, p));
+      for (int k = 0; k < j; ++k) std::swap(l(j, k), l(p, k));
+      std::swap(order[j], order[p]);
+    }
+    const Scalar root = std::sqrt(w(j, j));
+    l(j, j) = root;
+    for (int i = j + 1; i < N; ++i) l(i, j) = w(i, j) / root;
+    for (int k = j + 1; k < N; ++k)
+      for (int i = j + 1; i < N; ++i) w(i, k) -= l(i, j) * l(k, j);
+  }
+  Matrix g = Matrix::Zero();
+  for (int i = 0; i < N; ++i) g.row(order[i]) = l.row(i);
+  return g;
 }
 
 }  // namespace mjukf::detail

@@ -224,14 +224,14 @@ struct SquareRootPart<Scalar, L, M, Count, SquareRootCovariance> {
     CovarianceOnly,       // S could not be obtained: the full form's P, settled by the CovarianceGuard
   };
 
-  Matrix processNoiseRoot = Matrix::Zero();               // G with G Gᵀ = Q
-  MeasMatrix measurementNoiseRoot = MeasMatrix::Zero();   // the lower Cholesky factor of R
+  Matrix processNoiseRoot = Matrix::Zero();              // G with G Gᵀ = Q
+  MeasMatrix measurementNoiseRoot = MeasMatrix::Zero();  // the lower Cholesky factor of R
   Eigen::Matrix<Scalar, Count, 1> weightRoots = Eigen::Matrix<Scalar, Count, 1>::Zero();  // √|Wcᵢ|
   Matrix candidateFactor = Matrix::Zero();
   Candidate candidate = Candidate::CovarianceOnly;
-  Status settled = Status::Ok;                      // what the last settle() returned
-  PriorPoints workPrior = PriorPoints::Other;       // the work points and the candidate (mean, factor)
-  PriorPoints pointsPrior = PriorPoints::Other;     // the committed points and the committed estimate
+  Status settled = Status::Ok;                   // what the last settle() returned
+  PriorPoints workPrior = PriorPoints::Other;    // the work points and the candidate (mean, factor)
+  PriorPoints pointsPrior = PriorPoints::Other;  // the committed points and the committed estimate
   Eigen::Matrix<Scalar, L, 1> predictedMean = Eigen::Matrix<Scalar, L, 1>::Zero();  // Σ Wmᵢ χᵢ, unclamped
   // Workspace.
   Eigen::Matrix<Scalar, L, Count + L> predictionStack = Eigen::Matrix<Scalar, L, Count + L>::Zero();  // [√Wc Δχ | G]
@@ -239,9 +239,9 @@ struct SquareRootPart<Scalar, L, M, Count, SquareRootCovariance> {
   Eigen::Matrix<Scalar, L, Count + L + M> posteriorStack =  // [√Wc (Δχ − K ΔY) | G or 0 | K √R]
       Eigen::Matrix<Scalar, L, Count + L + M>::Zero();
   Eigen::Matrix<Scalar, L, M> gain = Eigen::Matrix<Scalar, L, M>::Zero();  // K = U S_y⁻¹
-  MeasMatrix maskedNoise = MeasMatrix::Zero();      // R' of a masked update
-  MeasMatrix maskedNoiseRoot = MeasMatrix::Zero();  // its lower Cholesky factor
-  bool noiseRootValid = true;                       // the factor of R (or R') of the last correction exists
+  MeasMatrix maskedNoise = MeasMatrix::Zero();                             // R' of a masked update
+  MeasMatrix maskedNoiseRoot = MeasMatrix::Zero();                         // its lower Cholesky factor
+  bool noiseRootValid = true;  // the factor of R (or R') of the last correction exists
 };
 
 // One unscented estimate of an L-vector measured through M components: the committed mean,
@@ -254,8 +254,7 @@ struct SquareRootPart<Scalar, L, M, Count, SquareRootCovariance> {
 // formed from it once per committed step (L²(L + 1)/2 multiply-adds) so that covariance() can be
 // returned by reference. The filters' estimate is one; the dual filter's parameters are a second.
 template <class Scalar, int L, int M, class PointSet = MerweScaled, class Form = FullCovariance>
-class Estimate
-    : private SquareRootPart<Scalar, L, M, PointSet::template Set<Scalar, L>::Count, Form> {
+class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Scalar, L>::Count, Form> {
   static_assert(isCovarianceForm<Form>, "the covariance form is FullCovariance or SquareRootCovariance");
   static constexpr bool SquareRoot = isSquareRootForm<Form>;
 
@@ -469,7 +468,7 @@ class Estimate
         if (sr().candidate == Candidate::Factor) outerOfLower(sr().candidateFactor, candidateCovariance_);
         const bool positive = (sr().candidateFactor.diagonal().array() > Scalar(0)).all();
         s = positive && allFinite(sr().candidateFactor) && allFinite(candidateCovariance_) ? Status::Ok
-                                                                                          : Status::NonFiniteResult;
+                                                                                           : Status::NonFiniteResult;
       }
       sr().settled = s;
       return s;
@@ -703,22 +702,26 @@ struct Correction {
 //   void constrainMean(Vector& candidateMean);        on the settled candidate mean (bounds)
 //   void commitPrediction(); void commitCorrection(); void commitOpenLoop(Scalar interval);
 
-#define MJUKF_POLICY_HAS(Name, Call)                                                      \
-  template <class P, class = void>                                                          \
-  struct PolicyHas_##Name : std::false_type {};                                             \
-  template <class P>                                                                        \
+#define MJUKF_POLICY_HAS(Name, Call)            \
+  template <class P, class = void>              \
+  struct PolicyHas_##Name : std::false_type {}; \
+  template <class P>                            \
   struct PolicyHas_##Name<P, std::void_t<decltype(Call)>> : std::true_type {};
-MJUKF_POLICY_HAS(predictParameters, std::declval<P&>().predictParameters(std::declval<const typename P::CheckStep&>(),
-                                                                        std::declval<const typename P::CheckEstimate&>()))
-MJUKF_POLICY_HAS(propagatePoints, std::declval<P&>().propagatePoints(std::declval<const typename P::CheckStep&>(),
-                                                                    std::declval<typename P::CheckEstimate::Points&>()))
-MJUKF_POLICY_HAS(propagateMean, std::declval<P&>().propagateMean(std::declval<const typename P::CheckStep&>(),
-                                                                std::declval<const typename P::CheckEstimate::Vector&>()))
-MJUKF_POLICY_HAS(measurePoints, std::declval<P&>().measurePoints(
-                                    std::declval<const typename P::CheckModel&>(),
-                                    std::declval<const typename P::CheckEstimate::Points&>(),
-                                    std::declval<typename P::CheckEstimate::MeasPoints&>()))
-MJUKF_POLICY_HAS(correctParameters, std::declval<P&>().correctParameters(std::declval<const typename P::CheckCorrection&>()))
+MJUKF_POLICY_HAS(predictParameters,
+                 std::declval<P&>().predictParameters(std::declval<const typename P::CheckStep&>(),
+                                                      std::declval<const typename P::CheckEstimate&>()))
+MJUKF_POLICY_HAS(propagatePoints,
+                 std::declval<P&>().propagatePoints(std::declval<const typename P::CheckStep&>(),
+                                                    std::declval<typename P::CheckEstimate::Points&>()))
+MJUKF_POLICY_HAS(propagateMean,
+                 std::declval<P&>().propagateMean(std::declval<const typename P::CheckStep&>(),
+                                                  std::declval<const typename P::CheckEstimate::Vector&>()))
+MJUKF_POLICY_HAS(measurePoints,
+                 std::declval<P&>().measurePoints(std::declval<const typename P::CheckModel&>(),
+                                                  std::declval<const typename P::CheckEstimate::Points&>(),
+                                                  std::declval<typename P::CheckEstimate::MeasPoints&>()))
+MJUKF_POLICY_HAS(correctParameters,
+                 std::declval<P&>().correctParameters(std::declval<const typename P::CheckCorrection&>()))
 MJUKF_POLICY_HAS(constrainMean, std::declval<P&>().constrainMean(std::declval<typename P::CheckEstimate::Vector&>()))
 MJUKF_POLICY_HAS(commitPrediction, std::declval<P&>().commitPrediction())
 MJUKF_POLICY_HAS(commitCorrection, std::declval<P&>().commitCorrection())
@@ -757,8 +760,8 @@ struct ParameterPolicy {
   using Param = typename Model::Param;
   using Meas = typename Model::Meas;
   using Input = typename Model::Input;
-  using Vector = typename Est::Vector;    // the estimated vector (x, or [x; θ])
-  using Points = typename Est::Points;    // its sigma points, one per column
+  using Vector = typename Est::Vector;  // the estimated vector (x, or [x; θ])
+  using Points = typename Est::Points;  // its sigma points, one per column
   using MeasPoints = typename Est::MeasPoints;
   using Mask = typename Est::Mask;
   using CorrectionOf = Correction<Model, Settings, Est>;
@@ -1013,9 +1016,9 @@ class UnscentedEngine {
                                            present, settings_.gate);
         s != Status::Ok)
       return s;
-    const Status parameters = policy_.correctParameters(Correction<Model, Settings, Est>{
-        model_, settings_, y, present, estimate_.measuredPoints(), prior.mean, estimate_.gainFactor(),
-        estimate_.innovationFactor()});
+    const Status parameters = policy_.correctParameters(
+        Correction<Model, Settings, Est>{model_, settings_, y, present, estimate_.measuredPoints(), prior.mean,
+                                         estimate_.gainFactor(), estimate_.innovationFactor()});
     if (!taken(parameters)) return parameters;
     if (!allFinite(estimate_.candidateMean())) return Status::NonFiniteResult;
     const Status settled = estimate_.settle(settings_.repair);
@@ -1041,8 +1044,8 @@ class UnscentedEngine {
 // The engine of filter `Filter` over `Model`, with the parameter policy template `PolicyOf` (given the
 // model, stepper, settings and estimate) and an estimate of dimension L drawn with `PointSet`, in the
 // covariance form `Form`.
-template <class Filter, class Model, class Integrator, class Settings, template <class, class, class, class> class PolicyOf,
-          int L, class PointSet, class Form>
+template <class Filter, class Model, class Integrator, class Settings,
+          template <class, class, class, class> class PolicyOf, int L, class PointSet, class Form>
 using EngineOf = UnscentedEngine<
     Filter, Model, Integrator, Settings,
     PolicyOf<Model, Integrator, Settings, Estimate<typename Model::Scalar, L, Model::MeasDim, PointSet, Form>>, L,
