@@ -4,7 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "mjukf/mjukf.hpp"
-#include "mjukf/paper/paper.hpp"
+#include "paper/paper.hpp"
 
 namespace mjukf {
 
