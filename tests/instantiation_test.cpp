@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include "mjukf/mjukf.hpp"
+#include "mjukf/models/coupled_tank.hpp"
+#include "mjukf/models/flexible_joint.hpp"
 #include "paper/paper.hpp"
 
 namespace mjukf {
