@@ -11,9 +11,9 @@
 #include "common/csv.hpp"
 #include "mjukf/joint_ukf.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
-#include "mjukf/paper/experiments.hpp"
-#include "mjukf/paper/rmse.hpp"
-#include "mjukf/paper/schedule.hpp"
+#include "paper/experiments.hpp"
+#include "paper/rmse.hpp"
+#include "paper/schedule.hpp"
 
 namespace {
 

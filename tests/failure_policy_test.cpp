@@ -15,8 +15,8 @@
 #include "mjukf/measurement_gating.hpp"
 #include "mjukf/models/coupled_tank.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
-#include "mjukf/paper/experiments.hpp"
 #include "mjukf/ukf.hpp"
+#include "paper/experiments.hpp"
 #include "robustness_support.hpp"
 
 namespace {

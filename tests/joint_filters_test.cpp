@@ -8,9 +8,9 @@
 #include "mjukf/models/coupled_tank.hpp"
 #include "mjukf/models/flexible_joint.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
-#include "mjukf/paper/experiments.hpp"
 #include "mjukf/simulation.hpp"
 #include "mjukf/ukf.hpp"
+#include "paper/experiments.hpp"
 #include "test_support.hpp"
 
 namespace {

@@ -8,9 +8,9 @@
 
 #include <gtest/gtest.h>
 
-#include "mjukf/paper/experiments.hpp"
-#include "mjukf/paper/rmse.hpp"
-#include "mjukf/paper/schedule.hpp"
+#include "paper/experiments.hpp"
+#include "paper/rmse.hpp"
+#include "paper/schedule.hpp"
 #include "robustness_support.hpp"
 
 namespace {

@@ -15,9 +15,9 @@
 #include "mjukf/integrators/rk4.hpp"
 #include "mjukf/models/van_der_pol.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
-#include "mjukf/paper/experiments.hpp"
-#include "mjukf/paper/schedule.hpp"
 #include "mjukf/simulation.hpp"
+#include "paper/experiments.hpp"
+#include "paper/schedule.hpp"
 #include "robustness_support.hpp"
 #include "test_support.hpp"
 

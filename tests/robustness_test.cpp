@@ -17,10 +17,10 @@
 #include "mjukf/covariance_repair.hpp"
 #include "mjukf/detail/unscented_engine.hpp"  // CovarianceGuard
 #include "mjukf/measurement_gating.hpp"
-#include "mjukf/paper/experiments.hpp"
-#include "mjukf/paper/rmse.hpp"
-#include "mjukf/paper/schedule.hpp"
 #include "mjukf/simulation.hpp"
+#include "paper/experiments.hpp"
+#include "paper/rmse.hpp"
+#include "paper/schedule.hpp"
 #include "robustness_support.hpp"
 #include "test_support.hpp"
 

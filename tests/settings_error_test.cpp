@@ -14,8 +14,8 @@
 
 #include "mjukf/integrators/explicit_tr_bdf2.hpp"
 #include "mjukf/integrators/tr_bdf2.hpp"
-#include "mjukf/paper/experiments.hpp"
 #include "mjukf/simulation.hpp"
+#include "paper/experiments.hpp"
 #include "test_support.hpp"
 
 #if MJUKF_EXCEPTIONS

@@ -8,7 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "mjukf/integrators/i_tr_bdf2.hpp"
-#include "mjukf/paper/experiments.hpp"
+#include "paper/experiments.hpp"
 
 namespace {
 

@@ -17,7 +17,7 @@
 #include <gtest/gtest.h>
 
 #include "common/csv.hpp"
-#include "examples/run_program.hpp"
+#include "run_program.hpp"
 
 namespace {
 

@@ -12,7 +12,7 @@
 
 #include <gtest/gtest.h>
 
-#include "examples/run_program.hpp"
+#include "run_program.hpp"
 
 namespace {
 

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "integrators/cross_check.hpp"
+#include "cross_check.hpp"
 
 namespace {
 

@@ -3,7 +3,7 @@
 // Simulated measurements as the paper makes them (docs/plants.md §4): the plant integrated with I-TR-BDF2 at
 // step h from x₀, then white Gaussian noise of one standard deviation for every channel,
 // σ = sqrt(var(all states) / 10^(SNR/10)), the variance taken over every channel and sample together.
-// The 2019 systems (mjukf/paper/systems_2019.hpp) are integrated with their own integrator and take
+// The 2019 systems (paper/systems_2019.hpp) are integrated with their own integrator and take
 // noise relative to the signal instead: std ρ·|yᵢ| for each component of each sample.
 
 #include <cmath>

@@ -14,9 +14,9 @@
 #include "mjukf/dual_ukf.hpp"
 #include "mjukf/joint_ukf.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
-#include "mjukf/paper/rmse.hpp"
-#include "mjukf/paper/schedule.hpp"
 #include "mjukf/ukf.hpp"
+#include "paper/rmse.hpp"
+#include "paper/schedule.hpp"
 
 namespace mjukf::examples {
 
