@@ -52,8 +52,8 @@ struct Counting : Base {
     ++counts->input;
     return Base::input(t);
   }
-  typename Base::State derivative(typename Base::Scalar t, const typename Base::State& x,
-                                  const typename Base::Input& u, const typename Base::Param& theta) const {
+  typename Base::State derivative(typename Base::Scalar t, const typename Base::State& x, const typename Base::Input& u,
+                                  const typename Base::Param& theta) const {
     ++counts->derivative;
     return Base::derivative(t, x, u, theta);
   }
@@ -76,11 +76,11 @@ inline const char* filterName(FilterKind kind) {
 }
 
 template <FilterKind Kind, class Model>
-using FilterType = std::conditional_t<
-    Kind == FilterKind::Ukf, Ukf<Model>,
-    std::conditional_t<Kind == FilterKind::Jukf, JointUkf<Model>,
-                       std::conditional_t<Kind == FilterKind::Mjukf || Kind == FilterKind::MjukfAuto,
-                                          ModifiedJointUkf<Model>, DualUkf<Model>>>>;
+using FilterType =
+    std::conditional_t<Kind == FilterKind::Ukf, Ukf<Model>,
+                       std::conditional_t<Kind == FilterKind::Jukf, JointUkf<Model>,
+                                          std::conditional_t<Kind == FilterKind::Mjukf || Kind == FilterKind::MjukfAuto,
+                                                             ModifiedJointUkf<Model>, DualUkf<Model>>>>;
 
 /// The filter of kind `Kind` with the settings of `Experiment`, on `model` (the plant's model or a
 /// counting wrapper of it). The UKF is given the true parameters, the others the first guess.
@@ -88,23 +88,18 @@ template <FilterKind Kind, class Experiment, class Model = typename Experiment::
 FilterType<Kind, Model> makeFilter(const Model& model = Model()) {
   const auto x0 = Experiment::initialState();
   if constexpr (Kind == FilterKind::Ukf)
-    return FilterType<Kind, Model>(model, x0, Experiment::Model::trueParameters(),
-                                   Experiment::ukf());
+    return FilterType<Kind, Model>(model, x0, Experiment::Model::trueParameters(), Experiment::ukf());
   else if constexpr (Kind == FilterKind::Jukf)
-    return FilterType<Kind, Model>(model, x0, Experiment::initialParameters(),
-                                   Experiment::jointUkf());
+    return FilterType<Kind, Model>(model, x0, Experiment::initialParameters(), Experiment::jointUkf());
   else if constexpr (Kind == FilterKind::Mjukf)
-    return FilterType<Kind, Model>(model, x0, Experiment::initialParameters(),
-                                   Experiment::modifiedJointUkf());
+    return FilterType<Kind, Model>(model, x0, Experiment::initialParameters(), Experiment::modifiedJointUkf());
   else if constexpr (Kind == FilterKind::MjukfAuto) {
     auto settings = Experiment::modifiedJointUkf();
     settings.automaticTransformation = true;
     settings.adaptiveScaling = true;
     return FilterType<Kind, Model>(model, x0, Experiment::initialParameters(), settings);
-  }
-  else
-    return FilterType<Kind, Model>(model, x0, Experiment::initialParameters(),
-                                   Experiment::dualUkf());
+  } else
+    return FilterType<Kind, Model>(model, x0, Experiment::initialParameters(), Experiment::dualUkf());
 }
 
 /// Measurements y_k = x(k h) + v_k of the plant with its true parameters, simulated with I-TR-BDF2

@@ -121,7 +121,10 @@ class FloorSteps {
   using Input = typename Model::Input;
   static constexpr int Count = pointCount<Kind, Model>();
 
-  FloorSteps() { spreadPoints(measurements<Experiment>()[1000]); points_ = start_; }
+  FloorSteps() {
+    spreadPoints(measurements<Experiment>()[1000]);
+    points_ = start_;
+  }
 
   bool once() {
     if (k_ + 1 == kRows) {

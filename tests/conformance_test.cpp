@@ -81,8 +81,7 @@ TEST(Conformance, FlexibleJointModifiedJointUkf) {
 }
 
 TEST(Conformance, CoupledTankJointUkf) {
-  mjukf::JointUkf<Tank::Model> filter(Tank::Model(), Tank::initialState(), Tank::initialParameters(),
-                                      Tank::jointUkf());
+  mjukf::JointUkf<Tank::Model> filter(Tank::Model(), Tank::initialState(), Tank::initialParameters(), Tank::jointUkf());
   expectRelativelyNear(paperRmse<Tank>(filter, "coupled_tank_reference.csv")(0), 0.2919404233);
 }
 

@@ -530,8 +530,7 @@ TEST(DualUkf, OrderingsDifferWhereThetaDrivesTheDynamics) {
     stateGap = std::max(stateGap, (prior.state() - corrected.state()).cwiseAbs().maxCoeff());
     parameterGap = std::max(parameterGap, (prior.parameters() - corrected.parameters()).cwiseAbs().maxCoeff());
   }
-  std::printf("max |x̂ (prior) − x̂ (updated)| = %.3g, max |θ̂ (prior) − θ̂ (updated)| = %.3g\n", stateGap,
-              parameterGap);
+  std::printf("max |x̂ (prior) − x̂ (updated)| = %.3g, max |θ̂ (prior) − θ̂ (updated)| = %.3g\n", stateGap, parameterGap);
   EXPECT_GT(stateGap, 5.7e-7);
   EXPECT_GT(parameterGap, 8.6e-10);
 }

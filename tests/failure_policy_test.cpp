@@ -88,12 +88,15 @@ struct Snapshot {
   Matrix parameterNis;
 
   explicit Snapshot(const Filter& f)
-      : state(f.state()), covariance(f.covariance()), parameters(f.parameters()),
+      : state(f.state()),
+        covariance(f.covariance()),
+        parameters(f.parameters()),
         innovation(f.lastUpdate().innovation),
-        innovationCovarianceDiagonal(f.lastUpdate().innovationCovariance.diagonal()), nis(f.lastUpdate().nis),
+        innovationCovarianceDiagonal(f.lastUpdate().innovationCovariance.diagonal()),
+        nis(f.lastUpdate().nis),
         hasPropagatedPoints(f.hasPropagatedPoints()) {
-    if constexpr (std::is_same_v<Filter, mjukf::ModifiedJointUkf<typename Filter::Model, typename Filter::Integrator>>)
-    {
+    if constexpr (std::is_same_v<Filter,
+                                 mjukf::ModifiedJointUkf<typename Filter::Model, typename Filter::Integrator>>) {
       parameterPoints = f.parameterPoints();
       const auto& k = f.sensitivity();
       automaticState.resize(f.transformation().rows(), f.transformation().cols() + 1 + k.stateSensitivity().rows() +
@@ -169,8 +172,8 @@ struct AutomaticMjukfKind {
   template <class Stepper = mjukf::ITrBdf2<double>>
   using With = Toy<mjukf::ModifiedJointUkf, Stepper, mjukf::DualUkfOrdering::PriorParameters, ToyModel, true>;
 };
-using Kinds = ::testing::Types<Kind<mjukf::Ukf>, Kind<mjukf::JointUkf>, Kind<mjukf::ModifiedJointUkf>, AutomaticMjukfKind,
-                               DualKind<mjukf::DualUkfOrdering::PriorParameters>,
+using Kinds = ::testing::Types<Kind<mjukf::Ukf>, Kind<mjukf::JointUkf>, Kind<mjukf::ModifiedJointUkf>,
+                               AutomaticMjukfKind, DualKind<mjukf::DualUkfOrdering::PriorParameters>,
                                DualKind<mjukf::DualUkfOrdering::UpdatedParameters>>;
 TYPED_TEST_SUITE(FailurePolicy, Kinds);
 
@@ -240,13 +243,13 @@ TYPED_TEST(FailurePolicy, ModelReturnsNonFiniteValues) {
   expectRefusedAndUnchanged(filter, Status::NonFiniteResult,
                             refuseWith(ToyModel::BlowUp::Derivative, [](auto& f) { return f.timeUpdate(0.0, 0.01); }));
   ASSERT_EQ(filter.timeUpdate(0.0, 0.01), Status::Ok);
-  expectRefusedAndUnchanged(
-      filter, Status::NonFiniteResult,
-      refuseWith(ToyModel::BlowUp::Derivative, [](auto& f) { return f.propagateMean(0.0, 0.01); }));
+  expectRefusedAndUnchanged(filter, Status::NonFiniteResult, refuseWith(ToyModel::BlowUp::Derivative, [](auto& f) {
+                              return f.propagateMean(0.0, 0.01);
+                            }));
   ASSERT_EQ(filter.timeUpdate(0.0, 0.01), Status::Ok);
-  expectRefusedAndUnchanged(filter, Status::NonFiniteResult,
-                            refuseWith(ToyModel::BlowUp::Measurement,
-                                       [](auto& f) { return f.measurementUpdate(ToyModel::Meas(0.3)); }));
+  expectRefusedAndUnchanged(filter, Status::NonFiniteResult, refuseWith(ToyModel::BlowUp::Measurement, [](auto& f) {
+                              return f.measurementUpdate(ToyModel::Meas(0.3));
+                            }));
 }
 
 TYPED_TEST(FailurePolicy, CovarianceWithoutCholeskyFactor) {
@@ -425,7 +428,7 @@ TEST(DualUkfFailurePolicy, MaskedUpdateEqualsTheReducedModel) {
     EXPECT_NEAR(full.lastParameterUpdate().nis, reduced.lastParameterUpdate().nis,
                 1e-10 * reduced.lastParameterUpdate().nis);
     EXPECT_EQ(full.lastParameterUpdate().innovation(1), 0.0);  // the missing component, NaN in y
-    EXPECT_GT(std::abs(full.parameters()(0) - 2.0), 1e-3);    // the parameter did move
+    EXPECT_GT(std::abs(full.parameters()(0) - 2.0), 1e-3);     // the parameter did move
   }
 }
 
@@ -495,8 +498,8 @@ TEST(DualUkfFailurePolicy, FloatRefusalsLeaveItUnchanged) {
     for (const auto mode : {Model::BlowUp::Derivative, Model::BlowUp::Measurement}) {
       expectRefusedAndUnchanged(filter, Status::NonFiniteResult, [&blowUp, mode](auto& f) {
         blowUp = mode;
-        const Status s = mode == Model::BlowUp::Measurement ? f.measurementUpdate(Model::Meas(0.3f))
-                                                             : f.timeUpdate(0.01f, 0.01f);
+        const Status s =
+            mode == Model::BlowUp::Measurement ? f.measurementUpdate(Model::Meas(0.3f)) : f.timeUpdate(0.01f, 0.01f);
         blowUp = Model::BlowUp::Never;
         return s;
       });

@@ -94,7 +94,7 @@ TEST(JointFilters, JointUkfEqualsUkfOnTheAugmentedModel) {
   augmentedSettings.processNoise = jointSettings.processNoise;
   augmentedSettings.measurementNoise = jointSettings.measurementNoise;
   mjukf::JointUkf<Robot::Model, Euler> joint(Robot::Model(), Robot::initialState(), Robot::initialParameters(),
-                                              jointSettings);
+                                             jointSettings);
   AugmentedRobot::State z0;
   z0 << Robot::initialState(), Robot::initialParameters();
   mjukf::Ukf<AugmentedRobot, Euler> augmented(AugmentedRobot(), z0, AugmentedRobot::Param(), augmentedSettings);

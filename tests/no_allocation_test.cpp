@@ -127,26 +127,20 @@ using Tank = mjukf::paper::CoupledTankExperiment<double>;
 using RobotF = mjukf::paper::FlexibleJointExperiment<float>;
 constexpr auto kPrior = mjukf::DualUkfOrdering::PriorParameters;
 constexpr auto kUpdated = mjukf::DualUkfOrdering::UpdatedParameters;
-using Cases = ::testing::Types<Case<mjukf::Ukf, Robot>, Case<mjukf::JointUkf, Robot>,
-                               Case<mjukf::ModifiedJointUkf, Robot>, Case<mjukf::Ukf, Tank>,
-                               Case<mjukf::JointUkf, Tank>, Case<mjukf::ModifiedJointUkf, Tank>,
-                               Case<mjukf::ModifiedJointUkf, RobotF>, Case<mjukf::JointUkf, RobotF>,
-                               DualCase<Robot, kPrior>, DualCase<Robot, kUpdated>, DualCase<Tank, kPrior>,
-                               DualCase<Tank, kUpdated>, DualCase<RobotF, kPrior>, DualCase<RobotF, kUpdated>,
-                               DiscreteCase<mjukf::Ukf, double>, DiscreteCase<mjukf::JointUkf, double>,
-                               DiscreteCase<mjukf::ModifiedJointUkf, double>, DiscreteCase<mjukf::DualUkf, double>,
-                               DiscreteCase<mjukf::DualUkf, double, kUpdated>,
-                               DiscreteCase<mjukf::ModifiedJointUkf, float>,
-                               Case2019<mjukf::JointUkf, VanDerPol>, Case2019<mjukf::ModifiedJointUkf, VanDerPol>,
-                               Case2019<mjukf::DualUkf, VanDerPol>, Case2019<mjukf::JointUkf, Lorenz>,
-                               Case2019<mjukf::ModifiedJointUkf, Lorenz>,
-                               Automatic<Case<mjukf::ModifiedJointUkf, Robot>>,
-                               Automatic<Case<mjukf::ModifiedJointUkf, Tank>>,
-                               Automatic<Case<mjukf::ModifiedJointUkf, RobotF>>,
-                               Automatic<DiscreteCase<mjukf::ModifiedJointUkf, double>>,
-                               Automatic<DiscreteCase<mjukf::ModifiedJointUkf, float>>,
-                               Automatic<Case2019<mjukf::ModifiedJointUkf, VanDerPol>>,
-                               Automatic<Case2019<mjukf::ModifiedJointUkf, Lorenz>>>;
+using Cases = ::testing::Types<
+    Case<mjukf::Ukf, Robot>, Case<mjukf::JointUkf, Robot>, Case<mjukf::ModifiedJointUkf, Robot>, Case<mjukf::Ukf, Tank>,
+    Case<mjukf::JointUkf, Tank>, Case<mjukf::ModifiedJointUkf, Tank>, Case<mjukf::ModifiedJointUkf, RobotF>,
+    Case<mjukf::JointUkf, RobotF>, DualCase<Robot, kPrior>, DualCase<Robot, kUpdated>, DualCase<Tank, kPrior>,
+    DualCase<Tank, kUpdated>, DualCase<RobotF, kPrior>, DualCase<RobotF, kUpdated>, DiscreteCase<mjukf::Ukf, double>,
+    DiscreteCase<mjukf::JointUkf, double>, DiscreteCase<mjukf::ModifiedJointUkf, double>,
+    DiscreteCase<mjukf::DualUkf, double>, DiscreteCase<mjukf::DualUkf, double, kUpdated>,
+    DiscreteCase<mjukf::ModifiedJointUkf, float>, Case2019<mjukf::JointUkf, VanDerPol>,
+    Case2019<mjukf::ModifiedJointUkf, VanDerPol>, Case2019<mjukf::DualUkf, VanDerPol>,
+    Case2019<mjukf::JointUkf, Lorenz>, Case2019<mjukf::ModifiedJointUkf, Lorenz>,
+    Automatic<Case<mjukf::ModifiedJointUkf, Robot>>, Automatic<Case<mjukf::ModifiedJointUkf, Tank>>,
+    Automatic<Case<mjukf::ModifiedJointUkf, RobotF>>, Automatic<DiscreteCase<mjukf::ModifiedJointUkf, double>>,
+    Automatic<DiscreteCase<mjukf::ModifiedJointUkf, float>>, Automatic<Case2019<mjukf::ModifiedJointUkf, VanDerPol>>,
+    Automatic<Case2019<mjukf::ModifiedJointUkf, Lorenz>>>;
 TYPED_TEST_SUITE(NoAllocation, Cases);
 
 TYPED_TEST(NoAllocation, EveryPerStepCall) {
@@ -167,8 +161,8 @@ TYPED_TEST(NoAllocation, EveryPerStepCall) {
     status[3] = filter.measurementUpdate(y);  // without a time update: draws its own points
     status[4] = filter.timeUpdate(2 * h, h, u, 3);
     status[5] = filter.propagateMean(5 * h, h, u, 2);
-    status[6] = filter.measurementUpdate(bad);          // refused
-    status[7] = filter.timeUpdate(Scalar(0), -h);       // refused
+    status[6] = filter.measurementUpdate(bad);     // refused
+    status[7] = filter.timeUpdate(Scalar(0), -h);  // refused
     status[8] = filter.timeUpdate(7 * h, h, 4);
     status[9] = filter.measurementUpdate(y);
     (void)filter.lastUpdate().nis;
@@ -202,8 +196,8 @@ TYPED_TEST(NoAllocation, MaskingGatingBoundsAndRepair) {
   using Scalar = typename Filter::Scalar;
   using Meas = typename Filter::Meas;
   auto settings = paper.settings();
-  if constexpr (Filter::ParamDim > 0 && !std::is_same_v<Filter, mjukf::Ukf<typename Filter::Model,
-                                                                             typename Filter::Integrator>>) {
+  if constexpr (Filter::ParamDim > 0 &&
+                !std::is_same_v<Filter, mjukf::Ukf<typename Filter::Model, typename Filter::Integrator>>) {
     settings.parameterBounds.lower = paper.parameters() - Filter::Param::Constant(Scalar(1));
     settings.parameterBounds.upper = paper.parameters() + Filter::Param::Constant(Scalar(1));
   }
@@ -301,10 +295,10 @@ TEST(NoAllocationWitness, CountsAnAllocation) {
 
 TEST(NoAllocationWitness, EigenRefusesAHeapMatrix) {
   EXPECT_DEATH(allocationsDuring([] {
-    Eigen::MatrixXd dynamic(3, 3);
-    dynamic.setZero();
-    sink = reinterpret_cast<int*>(dynamic.data());
-  }),
+                 Eigen::MatrixXd dynamic(3, 3);
+                 dynamic.setZero();
+                 sink = reinterpret_cast<int*>(dynamic.data());
+               }),
                "is_malloc_allowed");
 }
 

@@ -33,8 +33,8 @@
 
 namespace {
 
-constexpr long kRows = 20001;        // 20 s at h = 1 ms, row 0 the initial estimate
-constexpr long kPrintEvery = 1000;   // one estimate line a second
+constexpr long kRows = 20001;       // 20 s at h = 1 ms, row 0 the initial estimate
+constexpr long kPrintEvery = 1000;  // one estimate line a second
 constexpr std::uint32_t kStackPaintDepth = 8192;
 
 // ---- Output without stdio ------------------------------------------------------------------------
@@ -62,7 +62,8 @@ class Line {
     Bits b;
     std::memcpy(&b, &value, sizeof b);
     put(' ');
-    for (int shift = 8 * static_cast<int>(sizeof b) - 4; shift >= 0; shift -= 4) put("0123456789abcdef"[(b >> shift) & 0xF]);
+    for (int shift = 8 * static_cast<int>(sizeof b) - 4; shift >= 0; shift -= 4)
+      put("0123456789abcdef"[(b >> shift) & 0xF]);
     return *this;
   }
   void write() {
@@ -258,7 +259,7 @@ bool runAll() {
     ok &= runFilter<Scalar, mjukf::JointUkf<Model>>("jukf", Experiment::initialParameters(), Experiment::jointUkf());
   if constexpr ((EMBEDDED_FILTERS & 4) != 0)
     ok &= runFilter<Scalar, mjukf::ModifiedJointUkf<Model>>("mjukf", Experiment::initialParameters(),
-                                                             Experiment::modifiedJointUkf());
+                                                            Experiment::modifiedJointUkf());
   if constexpr ((EMBEDDED_FILTERS & 8) != 0)
     ok &= runFilter<Scalar, mjukf::DualUkf<Model>>("dual", Experiment::initialParameters(), Experiment::dualUkf());
   if constexpr (EMBEDDED_FILTERS == 0) {  // the baseline: the plant and the output alone

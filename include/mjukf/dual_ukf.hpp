@@ -73,9 +73,9 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
   using Base = ParameterPolicy<Model, Integrator, Settings, Est>;
 
  public:
+  using Base::StateDim, Base::ParamDim, Base::MeasDim;
   using typename Base::Scalar, typename Base::State, typename Base::Param, typename Base::Meas, typename Base::Input;
   using typename Base::Vector, typename Base::Points, typename Base::MeasPoints, typename Base::Mask;
-  using Base::StateDim, Base::ParamDim, Base::MeasDim;
   /// The parameter filter: an estimate of θ measured through the m components of y, with the state
   /// filter's sigma-point set.
   using ParameterEstimate = Estimate<Scalar, ParamDim, MeasDim, typename Est::PointSetType>;
@@ -215,8 +215,8 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
     const auto& thetas = drawn ? pe.workPoints() : pe.points();
     for (int j = 0; j < ParameterCount; ++j)  // Dⱼ = g(Φ_h(x̂_{k−1}; θⱼ), θⱼ)
       pe.measuredPoints().col(j) = model.measurement(drawn ? state : State(propagatedStates_.col(j)), thetas.col(j));
-    if (const Status st = pe.correct(thetas, pe.measuredPoints(), pe.mean(), pe.covariance(), y, observationNoise_,
-                                     present, noGate_);
+    if (const Status st =
+            pe.correct(thetas, pe.measuredPoints(), pe.mean(), pe.covariance(), y, observationNoise_, present, noGate_);
         st != Status::Ok)
       return st;
     if (!allFinite(pe.candidateMean())) return Status::NonFiniteResult;
@@ -258,7 +258,7 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
     return engine.predict(step, priorMean_, priorFactor_);
   }
 
-  ParameterEstimate estimate_;  // θ̂, P^θ, the θⱼ
+  ParameterEstimate estimate_;                                // θ̂, P^θ, the θⱼ
   Eigen::Matrix<Scalar, MeasDim, MeasDim> observationNoise_;  // R + parameterObservationNoise
   bool boundsActive_;
   bool storesStep_;  // the UpdatedParameters ordering
@@ -354,7 +354,9 @@ class DualUkf
   /// P^θ, the parameter filter's covariance.
   const ParamMatrix& parameterCovariance() const { return this->policy_.estimate().covariance(); }
   /// Innovation, its covariance and NIS of the parameter filter's last successful correction.
-  const UpdateDiagnostics<Scalar, MeasDim>& lastParameterUpdate() const { return this->policy_.estimate().diagnostics(); }
+  const UpdateDiagnostics<Scalar, MeasDim>& lastParameterUpdate() const {
+    return this->policy_.estimate().diagnostics();
+  }
 
   /// Starts the state filter again from (state, covariance), keeping the parameter filter. When one is
   /// not finite or the covariance is not symmetric positive definite, it changes nothing and throws

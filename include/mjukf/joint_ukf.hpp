@@ -27,8 +27,7 @@ struct JointUkfSettings : ParameterEstimationSettings<Scalar, StateDim + ParamDi
 };
 /// The settings of `JointUkf<Model>`.
 template <class Model>
-using JointUkfSettingsFor =
-    JointUkfSettings<typename Model::Scalar, Model::StateDim, Model::ParamDim, Model::MeasDim>;
+using JointUkfSettingsFor = JointUkfSettings<typename Model::Scalar, Model::StateDim, Model::ParamDim, Model::MeasDim>;
 
 namespace detail {
 
@@ -40,8 +39,8 @@ class AugmentedParameters : public ParameterPolicy<Model, Integrator, Settings, 
   using Base = ParameterPolicy<Model, Integrator, Settings, Est>;
 
  public:
-  using typename Base::Param, typename Base::Points, typename Base::MeasPoints, typename Base::Vector;
   using Base::StateDim, Base::ParamDim;
+  using typename Base::Param, typename Base::Points, typename Base::MeasPoints, typename Base::Vector;
 
   AugmentedParameters(const Settings& settings, const Param&)
       : bounds_(settings.parameterBounds), boundsActive_(settings.parameterBounds.active()) {}

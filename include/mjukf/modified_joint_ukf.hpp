@@ -14,8 +14,8 @@
 #include "mjukf/filter_settings.hpp"
 #include "mjukf/model.hpp"
 #include "mjukf/parameter_bounds.hpp"
-#include "mjukf/settings_error.hpp"
 #include "mjukf/parameter_sensitivity.hpp"
+#include "mjukf/settings_error.hpp"
 
 namespace mjukf {
 
@@ -77,9 +77,9 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   using Base = ParameterPolicy<Model, Integrator, Settings, Est>;
 
  public:
-  using typename Base::Scalar, typename Base::State, typename Base::Param, typename Base::Meas, typename Base::Vector;
-  using typename Base::Points, typename Base::MeasPoints, typename Base::Mask;
   using Base::StateDim, Base::ParamDim, Base::MeasDim, Base::Count;
+  using typename Base::Points, typename Base::MeasPoints, typename Base::Mask;
+  using typename Base::Scalar, typename Base::State, typename Base::Param, typename Base::Meas, typename Base::Vector;
   static_assert(Count == 2 * StateDim + 1,
                 "ModifiedJointUkf needs van der Merwe's 2n + 1 sigma points: eqs. 8-10 pair each with its own "
                 "theta_i (the cubature set has 2n)");
@@ -159,8 +159,7 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
     if (automatic_) {
       const Scalar memory = s.adaptiveScaling ? s.convergenceTime : std::numeric_limits<Scalar>::infinity();
       const auto measure = [&c](const State& x, const Param& theta) { return c.model.measurement(x, theta); };
-      if (!sensitivity_.correct(c.priorMean, parameters_, measure, c.gainFactor, c.innovationFactor, memory,
-                                c.present))
+      if (!sensitivity_.correct(c.priorMean, parameters_, measure, c.gainFactor, c.innovationFactor, memory, c.present))
         return Status::NonFiniteResult;
     }
     if (s.automaticTransformation)
@@ -227,7 +226,7 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
 
   bool automatic_;
   bool boundsActive_;
-  Param parameters_ = Param::Zero();             // θ̂
+  Param parameters_ = Param::Zero();                   // θ̂
   ParamPoints parameterPoints_ = ParamPoints::Zero();  // θᵢ
   // Workspace of the parameter correction, committed with the state's.
   Param candidateParameters_ = Param::Zero();
@@ -267,10 +266,9 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
 /// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
 /// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled>
-class ModifiedJointUkf
-    : public detail::EngineOf<ModifiedJointUkf<Model_, Integrator_, PointSet>, Model_, Integrator_,
-                              ModifiedJointUkfSettingsFor<Model_>, detail::ModifiedJointParameters, Model_::StateDim,
-                              PointSet> {
+class ModifiedJointUkf : public detail::EngineOf<ModifiedJointUkf<Model_, Integrator_, PointSet>, Model_, Integrator_,
+                                                 ModifiedJointUkfSettingsFor<Model_>, detail::ModifiedJointParameters,
+                                                 Model_::StateDim, PointSet> {
   static_assert(checkModel<Model_, 1>());
   using Engine = typename ModifiedJointUkf::UnscentedEngine;
   friend Engine;

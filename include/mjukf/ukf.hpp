@@ -123,7 +123,9 @@ class Ukf : public detail::EngineOf<Ukf<Model_, Integrator_, PointSet>, Model_, 
   /// rebuilding it. When one is not finite or the covariance is not symmetric positive definite, it
   /// changes nothing and throws std::invalid_argument naming the argument (without exceptions: returns
   /// the SettingsError; ResetResult, settings_error.hpp).
-  ResetResult reset(const State& state, const StateMatrix& covariance) { return reset(state, covariance, parameters()); }
+  ResetResult reset(const State& state, const StateMatrix& covariance) {
+    return reset(state, covariance, parameters());
+  }
   /// Starts again from (state, covariance) with other fixed parameters.
   ResetResult reset(const State& state, const StateMatrix& covariance, const Param& parameters) {
     if (SettingsError e = detail::requireFinite(kOwner, "state", state)) return detail::report(e);

@@ -29,7 +29,7 @@ struct LinearModel {
   using Input = Eigen::Matrix<double, InputDim, 1>;
 
   Eigen::Matrix3d A = (Eigen::Matrix3d() << -0.5, 1.0, 0.0,  //
-                       -1.0, -0.2, 0.3,                          //
+                       -1.0, -0.2, 0.3,                      //
                        0.2, 0.0, -0.8)
                           .finished();
   Eigen::Vector3d B = Eigen::Vector3d(0.0, 1.0, 0.5);

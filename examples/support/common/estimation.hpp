@@ -109,7 +109,8 @@ EstimateRun<typename Experiment::Model> runFilter(const typename Experiment::Mod
       return detail::runSchedule(filter, data, setup.measurementEvery);
     }
     case FilterKind::ModifiedJointUkf: {
-      ModifiedJointUkf<Model, Integrator> filter(model, setup.initialState, setup.initialParameters, setup.modifiedJointUkf);
+      ModifiedJointUkf<Model, Integrator> filter(model, setup.initialState, setup.initialParameters,
+                                                 setup.modifiedJointUkf);
       return detail::runSchedule(filter, data, setup.measurementEvery);
     }
     case FilterKind::DualUkf: {

@@ -29,8 +29,8 @@ constexpr long kMaxSimulationRows = 10'000'000;
 inline void requireSimulationDuration(const char* flag, double duration, double h) {
   if (duration > 0 && duration / h + 1 <= double(kMaxSimulationRows)) return;
   char limit[160];
-  std::snprintf(limit, sizeof limit, " needs a time > 0 s of at most %ld steps of h = %g s (%g s), not %g", kMaxSimulationRows,
-                h, double(kMaxSimulationRows - 1) * h, duration);
+  std::snprintf(limit, sizeof limit, " needs a time > 0 s of at most %ld steps of h = %g s (%g s), not %g",
+                kMaxSimulationRows, h, double(kMaxSimulationRows - 1) * h, duration);
   throw UsageError(flag + std::string(limit));
 }
 
@@ -39,7 +39,7 @@ struct SimulationOptions {
   double duration = 0;  ///< s; rows = round(duration / h) + 1
   double stepSize = 1e-3;
   std::uint64_t seed = 1;
-  double snrDb = 30;  ///< +inf for noise-free measurements
+  double snrDb = 30;         ///< +inf for noise-free measurements
   double relativeNoise = 0;  ///< > 0: noise of std relativeNoise·|yᵢ| per component, in place of the SNR
   typename Model::State initialState = Model::State::Zero();
   TrueParameters<typename Model::Param> parameters{Model::trueParameters()};

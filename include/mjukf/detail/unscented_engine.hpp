@@ -269,7 +269,7 @@ class Estimate {
     deviations_.noalias() = points.colwise() - priorMean;
     const auto& weights = sigmaPoints_.covarianceWeights();
     weightedOuterSum(measurementDeviations_, measurementDeviations_, weights, d.innovationCovariance);
-    d.innovationCovariance += measurementNoise;                                      // P_yy
+    d.innovationCovariance += measurementNoise;                                   // P_yy
     weightedOuterSum(deviations_, measurementDeviations_, weights, gainFactor_);  // P_xy
     d.innovation = y - predictedMeasurement;
     int presentCount = M;
@@ -406,22 +406,26 @@ struct Correction {
 //   void constrainMean(Vector& candidateMean);        on the settled candidate mean (bounds)
 //   void commitPrediction(); void commitCorrection(); void commitOpenLoop(Scalar interval);
 
-#define MJUKF_POLICY_HAS(Name, Call)                                                      \
-  template <class P, class = void>                                                          \
-  struct PolicyHas_##Name : std::false_type {};                                             \
-  template <class P>                                                                        \
+#define MJUKF_POLICY_HAS(Name, Call)            \
+  template <class P, class = void>              \
+  struct PolicyHas_##Name : std::false_type {}; \
+  template <class P>                            \
   struct PolicyHas_##Name<P, std::void_t<decltype(Call)>> : std::true_type {};
-MJUKF_POLICY_HAS(predictParameters, std::declval<P&>().predictParameters(std::declval<const typename P::CheckStep&>(),
-                                                                        std::declval<const typename P::CheckEstimate&>()))
-MJUKF_POLICY_HAS(propagatePoints, std::declval<P&>().propagatePoints(std::declval<const typename P::CheckStep&>(),
-                                                                    std::declval<typename P::CheckEstimate::Points&>()))
-MJUKF_POLICY_HAS(propagateMean, std::declval<P&>().propagateMean(std::declval<const typename P::CheckStep&>(),
-                                                                std::declval<const typename P::CheckEstimate::Vector&>()))
-MJUKF_POLICY_HAS(measurePoints, std::declval<P&>().measurePoints(
-                                    std::declval<const typename P::CheckModel&>(),
-                                    std::declval<const typename P::CheckEstimate::Points&>(),
-                                    std::declval<typename P::CheckEstimate::MeasPoints&>()))
-MJUKF_POLICY_HAS(correctParameters, std::declval<P&>().correctParameters(std::declval<const typename P::CheckCorrection&>()))
+MJUKF_POLICY_HAS(predictParameters,
+                 std::declval<P&>().predictParameters(std::declval<const typename P::CheckStep&>(),
+                                                      std::declval<const typename P::CheckEstimate&>()))
+MJUKF_POLICY_HAS(propagatePoints,
+                 std::declval<P&>().propagatePoints(std::declval<const typename P::CheckStep&>(),
+                                                    std::declval<typename P::CheckEstimate::Points&>()))
+MJUKF_POLICY_HAS(propagateMean,
+                 std::declval<P&>().propagateMean(std::declval<const typename P::CheckStep&>(),
+                                                  std::declval<const typename P::CheckEstimate::Vector&>()))
+MJUKF_POLICY_HAS(measurePoints,
+                 std::declval<P&>().measurePoints(std::declval<const typename P::CheckModel&>(),
+                                                  std::declval<const typename P::CheckEstimate::Points&>(),
+                                                  std::declval<typename P::CheckEstimate::MeasPoints&>()))
+MJUKF_POLICY_HAS(correctParameters,
+                 std::declval<P&>().correctParameters(std::declval<const typename P::CheckCorrection&>()))
 MJUKF_POLICY_HAS(constrainMean, std::declval<P&>().constrainMean(std::declval<typename P::CheckEstimate::Vector&>()))
 MJUKF_POLICY_HAS(commitPrediction, std::declval<P&>().commitPrediction())
 MJUKF_POLICY_HAS(commitCorrection, std::declval<P&>().commitCorrection())
@@ -460,8 +464,8 @@ struct ParameterPolicy {
   using Param = typename Model::Param;
   using Meas = typename Model::Meas;
   using Input = typename Model::Input;
-  using Vector = typename Est::Vector;    // the estimated vector (x, or [x; θ])
-  using Points = typename Est::Points;    // its sigma points, one per column
+  using Vector = typename Est::Vector;  // the estimated vector (x, or [x; θ])
+  using Points = typename Est::Points;  // its sigma points, one per column
   using MeasPoints = typename Est::MeasPoints;
   using Mask = typename Est::Mask;
   using CorrectionOf = Correction<Model, Settings, Est>;
@@ -715,9 +719,9 @@ class UnscentedEngine {
                                            settings_.measurementNoise, present, settings_.gate);
         s != Status::Ok)
       return s;
-    const Status parameters = policy_.correctParameters(Correction<Model, Settings, Est>{
-        model_, settings_, y, present, estimate_.measuredPoints(), priorMean, estimate_.gainFactor(),
-        estimate_.innovationFactor()});
+    const Status parameters = policy_.correctParameters(
+        Correction<Model, Settings, Est>{model_, settings_, y, present, estimate_.measuredPoints(), priorMean,
+                                         estimate_.gainFactor(), estimate_.innovationFactor()});
     if (!taken(parameters)) return parameters;
     if (!allFinite(estimate_.candidateMean())) return Status::NonFiniteResult;
     const Status settled = estimate_.settle(settings_.repair);
@@ -742,8 +746,8 @@ class UnscentedEngine {
 
 // The engine of filter `Filter` over `Model`, with the parameter policy template `PolicyOf` (given the
 // model, stepper, settings and estimate) and an estimate of dimension L drawn with `PointSet`.
-template <class Filter, class Model, class Integrator, class Settings, template <class, class, class, class> class PolicyOf,
-          int L, class PointSet>
+template <class Filter, class Model, class Integrator, class Settings,
+          template <class, class, class, class> class PolicyOf, int L, class PointSet>
 using EngineOf = UnscentedEngine<
     Filter, Model, Integrator, Settings,
     PolicyOf<Model, Integrator, Settings, Estimate<typename Model::Scalar, L, Model::MeasDim, PointSet>>, L, PointSet>;
