@@ -43,7 +43,7 @@ TEST(LinearAlgebra, CholeskyEqualsEigensAtEverySize) {
 
 TEST(LinearAlgebra, CholeskyRefusesSingularIndefiniteAndNonFinite) {
   Eigen::Matrix3d s;
-  EXPECT_FALSE(choleskyLower(Eigen::Matrix3d::Constant(0.5), s));  // rank 1: its pivots are rounding
+  EXPECT_FALSE(choleskyLower(Eigen::Matrix3d(Eigen::Matrix3d::Constant(0.5)), s));  // rank 1: pivots are rounding
   EXPECT_FALSE(choleskyLower(Eigen::Matrix3d(Eigen::Vector3d(1.0, -1e-3, 1.0).asDiagonal()), s));
   Eigen::Matrix3d nan = Eigen::Matrix3d::Identity();
   nan(2, 1) = std::numeric_limits<double>::quiet_NaN();
