@@ -56,9 +56,6 @@ struct DualUkfSettings : ParameterEstimationSettings<Scalar_, StateDim, MeasDim,
   /// Whether the state's time update uses θ̂_{k−1} or the corrected θ̂_k (see DualUkfOrdering).
   DualUkfOrdering ordering = DualUkfOrdering::PriorParameters;
 };
-/// The settings of `DualUkf<Model>`.
-template <class Model>
-using DualUkfSettingsFor = DualUkfSettings<typename Model::Scalar, Model::StateDim, Model::ParamDim, Model::MeasDim>;
 
 namespace detail {
 
@@ -297,7 +294,7 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
 /// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled>
 class DualUkf
-    : public detail::EngineOf<DualUkf<Model_, Integrator_, PointSet>, Model_, Integrator_, DualUkfSettingsFor<Model_>,
+    : public detail::EngineOf<DualUkf<Model_, Integrator_, PointSet>, Model_, Integrator_, DualUkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::ParamDim, Model_::MeasDim>,
                               detail::DualParameters, Model_::StateDim, PointSet> {
   static_assert(checkModel<Model_, 1>());
   using Engine = typename DualUkf::UnscentedEngine;
@@ -310,7 +307,7 @@ class DualUkf
   using typename Engine::Input, typename Engine::Meas, typename Engine::Param, typename Engine::Scalar,
       typename Engine::State;
   /// The settings struct of this filter.
-  using Settings = DualUkfSettingsFor<Model_>;
+  using Settings = DualUkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::ParamDim, Model_::MeasDim>;
   /// n, p and m: the model's sizes.
   using Engine::StateDim, Engine::ParamDim, Engine::MeasDim;
   /// The number of sigma points of the state filter.
@@ -388,5 +385,9 @@ class DualUkf
 
   static const State& initialMean(const State& initialState, const Param&) { return initialState; }
 };
+
+/// The settings of `DualUkf<Model>`.
+template <class Model>
+using DualUkfSettingsFor = DualUkfSettings<typename Model::Scalar, Model::StateDim, Model::ParamDim, Model::MeasDim>;
 
 }  // namespace mjukf

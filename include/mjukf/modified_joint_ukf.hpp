@@ -60,10 +60,6 @@ struct ModifiedJointUkfSettings : ParameterEstimationSettings<Scalar_, StateDim,
   /// time update (p extra propagations each) and kept in between; 0: once, at the first time update.
   int sensitivityInterval = 1;
 };
-/// The settings of `ModifiedJointUkf<Model>`.
-template <class Model>
-using ModifiedJointUkfSettingsFor =
-    ModifiedJointUkfSettings<typename Model::Scalar, Model::StateDim, Model::ParamDim, Model::MeasDim>;
 
 namespace detail {
 
@@ -267,18 +263,17 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
 /// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled>
 class ModifiedJointUkf : public detail::EngineOf<ModifiedJointUkf<Model_, Integrator_, PointSet>, Model_, Integrator_,
-                                                 ModifiedJointUkfSettingsFor<Model_>, detail::ModifiedJointParameters,
+                                                 ModifiedJointUkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::ParamDim, Model_::MeasDim>, detail::ModifiedJointParameters,
                                                  Model_::StateDim, PointSet> {
   static_assert(checkModel<Model_, 1>());
   using Engine = typename ModifiedJointUkf::UnscentedEngine;
   friend Engine;
-  friend typename Engine::PolicyType;
 
  public:
   /// The model's scalar and vector types (see the engine, detail/unscented_engine.hpp).
   using typename Engine::Meas, typename Engine::Param, typename Engine::Scalar, typename Engine::State;
   /// The settings struct of this filter.
-  using Settings = ModifiedJointUkfSettingsFor<Model_>;
+  using Settings = ModifiedJointUkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::ParamDim, Model_::MeasDim>;
   /// n, p and m: the model's sizes.
   using Engine::StateDim, Engine::ParamDim, Engine::MeasDim;
   /// 2n + 1 sigma points, each with its own parameter vector θᵢ.
@@ -370,5 +365,10 @@ class ModifiedJointUkf : public detail::EngineOf<ModifiedJointUkf<Model_, Integr
 
   static const State& initialMean(const State& initialState, const Param&) { return initialState; }
 };
+
+/// The settings of `ModifiedJointUkf<Model>`.
+template <class Model>
+using ModifiedJointUkfSettingsFor =
+    ModifiedJointUkfSettings<typename Model::Scalar, Model::StateDim, Model::ParamDim, Model::MeasDim>;
 
 }  // namespace mjukf
