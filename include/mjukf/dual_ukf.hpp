@@ -293,9 +293,10 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
 /// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
 /// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled>
-class DualUkf
-    : public detail::EngineOf<DualUkf<Model_, Integrator_, PointSet>, Model_, Integrator_, DualUkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::ParamDim, Model_::MeasDim>,
-                              detail::DualParameters, Model_::StateDim, PointSet> {
+class DualUkf : public detail::EngineOf<
+                    DualUkf<Model_, Integrator_, PointSet>, Model_, Integrator_,
+                    DualUkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::ParamDim, Model_::MeasDim>,
+                    detail::DualParameters, Model_::StateDim, PointSet> {
   static_assert(checkModel<Model_, 1>());
   using Engine = typename DualUkf::UnscentedEngine;
   using Policy = typename Engine::PolicyType;

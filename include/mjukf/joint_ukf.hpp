@@ -96,9 +96,10 @@ class AugmentedParameters : public ParameterPolicy<Model, Integrator, Settings, 
 /// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
 /// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled>
-class JointUkf
-    : public detail::EngineOf<JointUkf<Model_, Integrator_, PointSet>, Model_, Integrator_, JointUkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::ParamDim, Model_::MeasDim>,
-                              detail::AugmentedParameters, Model_::StateDim + Model_::ParamDim, PointSet> {
+class JointUkf : public detail::EngineOf<
+                     JointUkf<Model_, Integrator_, PointSet>, Model_, Integrator_,
+                     JointUkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::ParamDim, Model_::MeasDim>,
+                     detail::AugmentedParameters, Model_::StateDim + Model_::ParamDim, PointSet> {
   static_assert(checkModel<Model_, 1>());
   using Engine = typename JointUkf::UnscentedEngine;
   friend Engine;

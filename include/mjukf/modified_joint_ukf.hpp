@@ -262,9 +262,11 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
 /// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
 /// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled>
-class ModifiedJointUkf : public detail::EngineOf<ModifiedJointUkf<Model_, Integrator_, PointSet>, Model_, Integrator_,
-                                                 ModifiedJointUkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::ParamDim, Model_::MeasDim>, detail::ModifiedJointParameters,
-                                                 Model_::StateDim, PointSet> {
+class ModifiedJointUkf
+    : public detail::EngineOf<
+          ModifiedJointUkf<Model_, Integrator_, PointSet>, Model_, Integrator_,
+          ModifiedJointUkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::ParamDim, Model_::MeasDim>,
+          detail::ModifiedJointParameters, Model_::StateDim, PointSet> {
   static_assert(checkModel<Model_, 1>());
   using Engine = typename ModifiedJointUkf::UnscentedEngine;
   friend Engine;
@@ -273,7 +275,8 @@ class ModifiedJointUkf : public detail::EngineOf<ModifiedJointUkf<Model_, Integr
   /// The model's scalar and vector types (see the engine, detail/unscented_engine.hpp).
   using typename Engine::Meas, typename Engine::Param, typename Engine::Scalar, typename Engine::State;
   /// The settings struct of this filter.
-  using Settings = ModifiedJointUkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::ParamDim, Model_::MeasDim>;
+  using Settings =
+      ModifiedJointUkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::ParamDim, Model_::MeasDim>;
   /// n, p and m: the model's sizes.
   using Engine::StateDim, Engine::ParamDim, Engine::MeasDim;
   /// 2n + 1 sigma points, each with its own parameter vector θᵢ.

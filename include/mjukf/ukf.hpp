@@ -80,7 +80,8 @@ class KnownParameters : public ParameterPolicy<Model, Integrator, Settings, Est>
 /// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
 /// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled>
-class Ukf : public detail::EngineOf<Ukf<Model_, Integrator_, PointSet>, Model_, Integrator_, UkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::MeasDim>,
+class Ukf : public detail::EngineOf<Ukf<Model_, Integrator_, PointSet>, Model_, Integrator_,
+                                    UkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::MeasDim>,
                                     detail::KnownParameters, Model_::StateDim, PointSet> {
   static_assert(checkModel<Model_>());
   using Engine = typename Ukf::UnscentedEngine;
