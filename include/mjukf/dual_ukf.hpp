@@ -57,6 +57,7 @@ struct DualUkfSettings : ParameterEstimationSettings<Scalar_, StateDim, MeasDim,
   DualUkfOrdering ordering = DualUkfOrdering::PriorParameters;
 };
 
+/// \cond INTERNAL
 namespace detail {
 
 /// The parameter policy of `DualUkf` (docs/algorithms.md §9): a second unscented estimate, of θ, with a
@@ -277,6 +278,7 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
 };
 
 }  // namespace detail
+/// \endcond
 
 /// Dual unscented Kalman filter: a UKF of the state x run with the current parameter estimate θ̂, and a
 /// UKF of θ (a random walk) that observes the measurement through the state filter's prediction:

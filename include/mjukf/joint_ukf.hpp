@@ -26,6 +26,7 @@ struct JointUkfSettings : ParameterEstimationSettings<Scalar, StateDim + ParamDi
   using AugmentedMatrix = Eigen::Matrix<Scalar, AugmentedDim, AugmentedDim>;
 };
 
+/// \cond INTERNAL
 namespace detail {
 
 /// The parameter policy of `JointUkf`: θ is the tail of the augmented vector [x; θ], constant in the
@@ -84,6 +85,7 @@ class AugmentedParameters : public ParameterPolicy<Model, Integrator, Settings, 
 };
 
 }  // namespace detail
+/// \endcond
 
 /// Joint unscented Kalman filter: estimates z = [x; θ] with L = n + p, the parameters constant in the
 /// model (θ̇ = 0). A time update costs 2(n + p) + 1 model propagations.

@@ -61,6 +61,7 @@ struct ModifiedJointUkfSettings : ParameterEstimationSettings<Scalar_, StateDim,
   int sensitivityInterval = 1;
 };
 
+/// \cond INTERNAL
 namespace detail {
 
 /// The parameter policy of `ModifiedJointUkf` (docs/algorithms.md §5): every sigma point χᵢ carries its
@@ -239,6 +240,7 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
 };
 
 }  // namespace detail
+/// \endcond
 
 /// Modified joint unscented Kalman filter. Sigma points are drawn for the state alone (L = n, 2n + 1
 /// points); point i is propagated with its own parameter vector θᵢ, and the θᵢ are moved against the

@@ -80,11 +80,12 @@ class SymmetricSigmaPointSet {
   Scalar gamma() const { return gamma_; }
 
  protected:
+  /// Weights and γ zero until the derived set sets them.
   SymmetricSigmaPointSet() = default;
 
-  Weights meanWeights_ = Weights::Zero();
-  Weights covarianceWeights_ = Weights::Zero();
-  Scalar gamma_ = 0;
+  Weights meanWeights_ = Weights::Zero();        ///< Wmᵢ, set by the derived set
+  Weights covarianceWeights_ = Weights::Zero();  ///< Wcᵢ, set by the derived set
+  Scalar gamma_ = 0;                             ///< γ, set by the derived set
 
  private:
   Matrix factor_ = Matrix::Zero();  // workspace of generate()

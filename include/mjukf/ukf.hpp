@@ -22,6 +22,7 @@ struct UkfSettings : UnscentedSettings<Scalar, StateDim, MeasDim> {
   using StateMatrix = Eigen::Matrix<Scalar, StateDim, StateDim>;
 };
 
+/// \cond INTERNAL
 namespace detail {
 
 /// The parameter policy of `Ukf`: the parameters are known and fixed (detail/unscented_engine.hpp §3
@@ -68,6 +69,7 @@ class KnownParameters : public ParameterPolicy<Model, Integrator, Settings, Est>
 };
 
 }  // namespace detail
+/// \endcond
 
 /// Unscented Kalman filter of the state of `Model`, whose parameters are known and fixed.
 ///

@@ -42,6 +42,8 @@
 
 namespace mjukf::detail {
 
+/// \cond INTERNAL
+
 // ==== 1. Propagating a model over a step ==============================================================
 
 // The model's own input signal u(t), evaluated at every stage time: for the open-loop mean, one point.
@@ -478,6 +480,8 @@ struct ParameterPolicy {
   using CheckCorrection = Correction<Model, Settings, Est>;
 };
 
+/// \endcond
+
 // ==== 4. The engine ===================================================================================
 
 // The status of a step made of two parts that were both taken: Repaired if either was.
@@ -744,6 +748,7 @@ class UnscentedEngine {
   /// \endcond
 };
 
+/// \cond INTERNAL
 // The engine of filter `Filter` over `Model`, with the parameter policy template `PolicyOf` (given the
 // model, stepper, settings and estimate) and an estimate of dimension L drawn with `PointSet`.
 template <class Filter, class Model, class Integrator, class Settings,
@@ -751,5 +756,7 @@ template <class Filter, class Model, class Integrator, class Settings,
 using EngineOf = UnscentedEngine<
     Filter, Model, Integrator, Settings,
     PolicyOf<Model, Integrator, Settings, Estimate<typename Model::Scalar, L, Model::MeasDim, PointSet>>, L, PointSet>;
+
+/// \endcond
 
 }  // namespace mjukf::detail
