@@ -14,9 +14,9 @@
 #include "mjukf/integrators/i_tr_bdf2.hpp"
 #include "mjukf/joint_ukf.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
-#include "mjukf/paper/experiments.hpp"
 #include "mjukf/simulation.hpp"
 #include "mjukf/ukf.hpp"
+#include "paper/experiments.hpp"
 
 namespace mjukf::bench {
 

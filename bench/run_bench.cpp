@@ -12,8 +12,8 @@
 
 #include "bench_support.hpp"
 #include "common/csv.hpp"
-#include "mjukf/paper/rmse.hpp"
-#include "mjukf/paper/schedule.hpp"
+#include "paper/rmse.hpp"
+#include "paper/schedule.hpp"
 
 namespace mjukf::bench {
 namespace {

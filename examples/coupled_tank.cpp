@@ -6,7 +6,7 @@
 
 #include "common/plant.hpp"
 #include "common/program.hpp"
-#include "mjukf/paper/experiments.hpp"
+#include "paper/experiments.hpp"
 
 namespace {
 

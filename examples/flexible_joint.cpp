@@ -6,7 +6,7 @@
 
 #include "common/plant.hpp"
 #include "common/program.hpp"
-#include "mjukf/paper/experiments.hpp"
+#include "paper/experiments.hpp"
 
 namespace {
 
@@ -30,8 +30,8 @@ struct FlexibleJointPlant {
   // Paper Table 4 (Python on an HP Z420, mean of 20 runs).
   static constexpr PaperNumbers<2> published{{0.0177, 0.019}, {0.008, 0.01233}, 4.337, 3.717};
   // Conformance RMSEs on the reference file; the reference scripts' times on a 2-core machine.
-  static constexpr PaperNumbers<2> reference{{0.02671036066, 0.03426798571}, {0.006717243853, 0.008727060131}, 1.56,
-                                             1.06};
+  static constexpr PaperNumbers<2> reference{
+      {0.02671036066, 0.03426798571}, {0.006717243853, 0.008727060131}, 1.56, 1.06};
   // docs/plants.md §3: at t = 5 s, K_τ becomes 0.10 and m 0.30; 30 s; MJUKF with ξ = −0.0035.
   static std::optional<ParameterChange<Param>> parameterChange() {
     return ParameterChange<Param>{5.0, 30.0, Param(0.10, 0.30), Experiment::parameterChangeScaling};

@@ -6,7 +6,7 @@
 
 #include "common/plant.hpp"
 #include "common/program.hpp"
-#include "mjukf/paper/systems_2019.hpp"
+#include "paper/systems_2019.hpp"
 
 namespace {
 

@@ -40,8 +40,8 @@ int run(double parameterProcessNoise, unsigned seed) {
   std::normal_distribution<double> noise(0.0, sigma);
   std::vector<double> y(steps + 1);
   std::vector<VanDerPol::State> truth(steps + 1);
-  mjukf::simulate(VanDerPol(), mjukf::Rk4<double>(), VanDerPol::State(2, 0), VanDerPol::Param(trueMu), 0.0,
-                  h / 20, 20 * steps, [&](long k, double, const VanDerPol::State& x) {
+  mjukf::simulate(VanDerPol(), mjukf::Rk4<double>(), VanDerPol::State(2, 0), VanDerPol::Param(trueMu), 0.0, h / 20,
+                  20 * steps, [&](long k, double, const VanDerPol::State& x) {
                     if (k % 20 != 0) return;
                     truth[k / 20] = x;
                     y[k / 20] = x(0) + noise(rng);
@@ -51,8 +51,7 @@ int run(double parameterProcessNoise, unsigned seed) {
   settings.initialCovariance.diagonal() << 0.1, 0.1, 1.0;
   settings.processNoise.diagonal() << 1e-4, 1e-4, parameterProcessNoise;
   settings.measurementNoise << sigma * sigma;
-  mjukf::JointUkf<VanDerPol, Stepper> filter(VanDerPol(), VanDerPol::State(2, 0), VanDerPol::Param(0.5),
-                                             settings);
+  mjukf::JointUkf<VanDerPol, Stepper> filter(VanDerPol(), VanDerPol::State(2, 0), VanDerPol::Param(0.5), settings);
 
   double squaredStateError = 0, squaredMuError = 0;
   for (int k = 0; k < steps; ++k) {
@@ -65,8 +64,7 @@ int run(double parameterProcessNoise, unsigned seed) {
     squaredStateError += (filter.state() - truth[k + 1]).squaredNorm() / steps;
     if (k >= steps / 2) squaredMuError += std::pow(filter.parameters()(0) - trueMu, 2) / (steps - steps / 2);
   }
-  std::printf("mu = %.4f +- %.4f (true %.1f)\n", filter.parameters()(0), std::sqrt(filter.covariance()(2, 2)),
-              trueMu);
+  std::printf("mu = %.4f +- %.4f (true %.1f)\n", filter.parameters()(0), std::sqrt(filter.covariance()(2, 2)), trueMu);
   std::printf("RMSE: state %.4f, mu over the last 30 s %.4f\n", std::sqrt(squaredStateError),
               std::sqrt(squaredMuError));
   return 0;

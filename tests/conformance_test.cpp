@@ -11,9 +11,9 @@
 #include "common/csv.hpp"
 #include "mjukf/joint_ukf.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
-#include "mjukf/paper/experiments.hpp"
-#include "mjukf/paper/rmse.hpp"
-#include "mjukf/paper/schedule.hpp"
+#include "paper/experiments.hpp"
+#include "paper/rmse.hpp"
+#include "paper/schedule.hpp"
 
 namespace {
 
@@ -81,8 +81,7 @@ TEST(Conformance, FlexibleJointModifiedJointUkf) {
 }
 
 TEST(Conformance, CoupledTankJointUkf) {
-  mjukf::JointUkf<Tank::Model> filter(Tank::Model(), Tank::initialState(), Tank::initialParameters(),
-                                      Tank::jointUkf());
+  mjukf::JointUkf<Tank::Model> filter(Tank::Model(), Tank::initialState(), Tank::initialParameters(), Tank::jointUkf());
   expectRelativelyNear(paperRmse<Tank>(filter, "coupled_tank_reference.csv")(0), 0.2919404233);
 }
 

@@ -18,9 +18,9 @@
 #include "mjukf/model.hpp"
 #include "mjukf/models/flexible_joint.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
-#include "mjukf/paper/experiments.hpp"
-#include "mjukf/paper/schedule.hpp"
 #include "mjukf/ukf.hpp"
+#include "paper/experiments.hpp"
+#include "paper/schedule.hpp"
 #include "robustness_support.hpp"
 #include "test_support.hpp"
 

@@ -17,11 +17,11 @@
 #include "mjukf/integrators/rk4.hpp"
 #include "mjukf/models/coupled_tank.hpp"
 #include "mjukf/models/flexible_joint.hpp"
-#include "mjukf/paper/experiments.hpp"
-#include "mjukf/paper/rmse.hpp"
-#include "mjukf/paper/schedule.hpp"
 #include "mjukf/sigma_points.hpp"
 #include "mjukf/ukf.hpp"
+#include "paper/experiments.hpp"
+#include "paper/rmse.hpp"
+#include "paper/schedule.hpp"
 #include "robustness_support.hpp"
 #include "test_support.hpp"
 
@@ -530,8 +530,7 @@ TEST(DualUkf, OrderingsDifferWhereThetaDrivesTheDynamics) {
     stateGap = std::max(stateGap, (prior.state() - corrected.state()).cwiseAbs().maxCoeff());
     parameterGap = std::max(parameterGap, (prior.parameters() - corrected.parameters()).cwiseAbs().maxCoeff());
   }
-  std::printf("max |x̂ (prior) − x̂ (updated)| = %.3g, max |θ̂ (prior) − θ̂ (updated)| = %.3g\n", stateGap,
-              parameterGap);
+  std::printf("max |x̂ (prior) − x̂ (updated)| = %.3g, max |θ̂ (prior) − θ̂ (updated)| = %.3g\n", stateGap, parameterGap);
   EXPECT_GT(stateGap, 5.7e-7);
   EXPECT_GT(parameterGap, 8.6e-10);
 }

@@ -17,9 +17,10 @@
 #include "mjukf/measurement_gating.hpp"
 #include "mjukf/models/coupled_tank.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
-#include "mjukf/paper/experiments.hpp"
 #include "mjukf/ukf.hpp"
+#include "paper/experiments.hpp"
 #include "robustness_support.hpp"
+#include "test_support.hpp"
 
 namespace {
 

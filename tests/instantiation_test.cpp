@@ -4,7 +4,9 @@
 #include <gtest/gtest.h>
 
 #include "mjukf/mjukf.hpp"
-#include "mjukf/paper/paper.hpp"
+#include "mjukf/models/coupled_tank.hpp"
+#include "mjukf/models/flexible_joint.hpp"
+#include "paper/paper.hpp"
 
 namespace mjukf {
 

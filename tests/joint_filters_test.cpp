@@ -8,9 +8,9 @@
 #include "mjukf/models/coupled_tank.hpp"
 #include "mjukf/models/flexible_joint.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
-#include "mjukf/paper/experiments.hpp"
 #include "mjukf/simulation.hpp"
 #include "mjukf/ukf.hpp"
+#include "paper/experiments.hpp"
 #include "test_support.hpp"
 
 namespace {
@@ -94,7 +94,7 @@ TEST(JointFilters, JointUkfEqualsUkfOnTheAugmentedModel) {
   augmentedSettings.processNoise = jointSettings.processNoise;
   augmentedSettings.measurementNoise = jointSettings.measurementNoise;
   mjukf::JointUkf<Robot::Model, Euler> joint(Robot::Model(), Robot::initialState(), Robot::initialParameters(),
-                                              jointSettings);
+                                             jointSettings);
   AugmentedRobot::State z0;
   z0 << Robot::initialState(), Robot::initialParameters();
   mjukf::Ukf<AugmentedRobot, Euler> augmented(AugmentedRobot(), z0, AugmentedRobot::Param(), augmentedSettings);

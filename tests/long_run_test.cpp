@@ -8,9 +8,9 @@
 
 #include <gtest/gtest.h>
 
-#include "mjukf/paper/experiments.hpp"
-#include "mjukf/paper/rmse.hpp"
-#include "mjukf/paper/schedule.hpp"
+#include "paper/experiments.hpp"
+#include "paper/rmse.hpp"
+#include "paper/schedule.hpp"
 #include "robustness_support.hpp"
 
 namespace {
@@ -36,10 +36,11 @@ void longRun(Filter& filter, const char* name) {
         if (k >= kRows - 3'600'001) lastHour.add(f.parameters(), Tank::Model::trueParameters());
       });
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("%s: %ld rows (%ld steps), %ld updates checked, status %s, %ld repairs, %ld rejected, "
-              "k_flow %.6f (RMSE over the last hour %.3g), %.2f s\n",
-              name, outcome.row + 1, outcome.row, updatesChecked, mjukf::toString(outcome.status), outcome.repairs,
-              outcome.rejected, filter.parameters()(0), lastHour.value()(0), seconds);
+  std::printf(
+      "%s: %ld rows (%ld steps), %ld updates checked, status %s, %ld repairs, %ld rejected, "
+      "k_flow %.6f (RMSE over the last hour %.3g), %.2f s\n",
+      name, outcome.row + 1, outcome.row, updatesChecked, mjukf::toString(outcome.status), outcome.repairs,
+      outcome.rejected, filter.parameters()(0), lastHour.value()(0), seconds);
   EXPECT_EQ(outcome.status, mjukf::Status::Ok);
   EXPECT_EQ(outcome.row, kRows - 1);
   EXPECT_EQ(updatesChecked, (kRows - 1) / Tank::measurementEvery + 1);

@@ -87,7 +87,8 @@ TEST(Lorenz, ParameterSensitivitiesAreDiagonal) {
   for (int j = 0; j < 3; ++j) {
     const Lorenz<double>::State column =
         model.derivative(0.0, x, {}, theta + Lorenz<double>::Param::Unit(j)) - model.derivative(0.0, x, {}, theta);
-    for (int i = 0; i < 3; ++i) EXPECT_NEAR(column(i), i == j ? expected(i) : 0.0, 1e-12) << "(" << i << ", " << j << ")";
+    for (int i = 0; i < 3; ++i)
+      EXPECT_NEAR(column(i), i == j ? expected(i) : 0.0, 1e-12) << "(" << i << ", " << j << ")";
   }
   EXPECT_EQ(model.measurement(x, theta), x);
 }

@@ -15,9 +15,9 @@
 #include "mjukf/integrators/rk4.hpp"
 #include "mjukf/models/van_der_pol.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
-#include "mjukf/paper/experiments.hpp"
-#include "mjukf/paper/schedule.hpp"
 #include "mjukf/simulation.hpp"
+#include "paper/experiments.hpp"
+#include "paper/schedule.hpp"
 #include "robustness_support.hpp"
 #include "test_support.hpp"
 
@@ -45,7 +45,8 @@ void simulateNoisy(const Model& model, const Integrator& integrator, const typen
   y.resize(static_cast<std::size_t>(steps + 1));
   truth.resize(y.size());
   mjukf::simulate(model, integrator, x0, parameterAt, 0.0, h, steps, [&](long k, double, const auto& x) {
-    for (int j = 0; j < Model::MeasDim; ++j) y[static_cast<std::size_t>(k)](j) = x(j) + (noise > 0 ? noise * normal(random) : 0.0);
+    for (int j = 0; j < Model::MeasDim; ++j)
+      y[static_cast<std::size_t>(k)](j) = x(j) + (noise > 0 ? noise * normal(random) : 0.0);
     truth[static_cast<std::size_t>(k)] = parameterAt(k);
   });
 }
@@ -107,7 +108,7 @@ TEST(AutomaticTransformation, EqualsTheAnalyticOneOnTheTank) {
   EXPECT_NEAR(filter.transformation()(0, 0), expectedT(0), tTolerance);
   EXPECT_NEAR(filter.transformation()(0, 1), expectedT(1), tTolerance);
   EXPECT_NEAR(filter.transformation().row(0).sum(), 1.0, tTolerance);  // both sensitivities positive
-  EXPECT_DOUBLE_EQ(filter.scalings()(0), -1.0);                          // adaptiveScaling off: the setting
+  EXPECT_DOUBLE_EQ(filter.scalings()(0), -1.0);                        // adaptiveScaling off: the setting
 }
 
 // The sign convention (docs/tuning-mjukf.md): eq. 9 moves θ̂ by −ξ T (y − Ȳ), and y − Ȳ ≈ ψ (θ − θ̂)
@@ -120,8 +121,9 @@ TEST(ScalingSign, NegativeXiForAMeasurementThatRisesWithTheParameter) {
   const long steps = 20000;
   std::vector<Tank::Model::Meas> y;
   std::vector<Tank::Param> truth;
-  simulateNoisy(model, mjukf::ITrBdf2<double>(), Tank::initialState(), [](long) { return Tank::Model::trueParameters(); },
-                h, steps, 0.0, y, truth);
+  simulateNoisy(
+      model, mjukf::ITrBdf2<double>(), Tank::initialState(), [](long) { return Tank::Model::trueParameters(); }, h,
+      steps, 0.0, y, truth);
   const auto finalError = [&](double xi) {
     auto s = Tank::modifiedJointUkf();
     s.scaling = xi;
@@ -151,8 +153,9 @@ TEST(AutomaticModes, ConvergeOnVanDerPol) {
   const long steps = 1000;
   std::vector<Model::Meas> y;
   std::vector<Model::Param> truth;
-  simulateNoisy(model, Integrator(), Model::State(1.4, 0.0), [](long) { return Model::trueParameters(); }, h, steps,
-                0.1, y, truth);
+  simulateNoisy(
+      model, Integrator(), Model::State(1.4, 0.0), [](long) { return Model::trueParameters(); }, h, steps, 0.1, y,
+      truth);
   mjukf::ModifiedJointUkfSettingsFor<Model> s;
   s.initialCovariance.diagonal().setConstant(5);
   s.processNoise.diagonal().setConstant(1e-3);
@@ -184,8 +187,9 @@ TEST(AutomaticModes, TrackTheRobotsParameterChange) {
   const Robot::Param before = Robot::Model::trueParameters(), after(0.10, 0.30);
   std::vector<Robot::Model::Meas> y;
   std::vector<Robot::Param> truth;
-  simulateNoisy(model, mjukf::ITrBdf2<double>(), Robot::initialState(),
-                [&](long k) { return double(k) * h >= 5.0 ? after : before; }, h, steps, 0.03, y, truth);
+  simulateNoisy(
+      model, mjukf::ITrBdf2<double>(), Robot::initialState(),
+      [&](long k) { return double(k) * h >= 5.0 ? after : before; }, h, steps, 0.03, y, truth);
   mjukf::ModifiedJointUkf<Robot::Model> filter(model, Robot::initialState(), Robot::initialParameters(),
                                                automatic(Robot::modifiedJointUkf()));
   Robot::Param lowest = Robot::Param::Constant(1e9), highest = -lowest;
@@ -203,7 +207,7 @@ TEST(AutomaticModes, TrackTheRobotsParameterChange) {
   std::printf("covered %.3f %.3f, K_tau min %.4f, m max %.4f\n", covered(0), covered(1), lowest(0), highest(1));
   EXPECT_GT(covered(0), 0.9) << filter.parameters().transpose();
   EXPECT_GT(covered(1), 0.9) << filter.parameters().transpose();
-  EXPECT_GT(lowest(0), after(0) - 0.1 * std::abs(change(0)));  // K_τ falls: no undershoot below 0.095
+  EXPECT_GT(lowest(0), after(0) - 0.1 * std::abs(change(0)));   // K_τ falls: no undershoot below 0.095
   EXPECT_LT(highest(1), after(1) + 0.1 * std::abs(change(1)));  // m rises: no overshoot above 0.309
 }
 
@@ -251,9 +255,8 @@ TEST(AutomaticModes, RefusedStepsLeaveTheAdaptiveStateUnchanged) {
   FlakyRobot model;
   model.armed = &armed;
   model.centre = &centre;
-  mjukf::ModifiedJointUkf<FlakyRobot> filter(
-      model, Robot::initialState(), Robot::initialParameters(),
-      automatic(Robot::modifiedJointUkf()));
+  mjukf::ModifiedJointUkf<FlakyRobot> filter(model, Robot::initialState(), Robot::initialParameters(),
+                                             automatic(Robot::modifiedJointUkf()));
   const double h = Robot::stepSize;
   const Robot::Model::Meas y = Robot::Model::Meas::Constant(0.02);
   for (int k = 0; k < 50; ++k) {

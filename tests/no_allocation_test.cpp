@@ -18,10 +18,10 @@
 #include "mjukf/dual_ukf.hpp"
 #include "mjukf/model.hpp"
 #include "mjukf/models/flexible_joint.hpp"
-#include "mjukf/paper/experiments.hpp"
-#include "mjukf/paper/schedule.hpp"
-#include "mjukf/paper/systems_2019.hpp"
 #include "no_input_model.hpp"
+#include "paper/experiments.hpp"
+#include "paper/schedule.hpp"
+#include "paper/systems_2019.hpp"
 #include "robustness_support.hpp"
 #include "test_support.hpp"
 

@@ -63,10 +63,10 @@ TYPED_TEST(NoInputModel, FilterCallsNeedNoInputAndEqualTheEmptyInput) {
 TEST(NoInputModel, SimulateNeedsNoInput) {
   const Pendulum::Param c = Pendulum::Param::Constant(0.2);
   const Pendulum::Input none;
-  const Pendulum::State implicit = mjukf::simulate(Pendulum(), Rk4(), kStart, c, 0.0, 0.01, 500,
-                                                    [](long, double, const Pendulum::State&) {});
-  const Pendulum::State explicitEmpty = mjukf::simulate(Pendulum(), Rk4(), kStart, none, c, 0.0, 0.01, 500,
-                                                         [](long, double, const Pendulum::State&) {});
+  const Pendulum::State implicit =
+      mjukf::simulate(Pendulum(), Rk4(), kStart, c, 0.0, 0.01, 500, [](long, double, const Pendulum::State&) {});
+  const Pendulum::State explicitEmpty =
+      mjukf::simulate(Pendulum(), Rk4(), kStart, none, c, 0.0, 0.01, 500, [](long, double, const Pendulum::State&) {});
   EXPECT_EQ(implicit, explicitEmpty);
   EXPECT_EQ(mjukf::stepModel(Pendulum(), Rk4(), 0.0, 0.01, kStart, c),
             mjukf::stepModel(Pendulum(), Rk4(), 0.0, 0.01, kStart, none, c));

@@ -8,9 +8,9 @@
 #include <Eigen/Core>
 #include <gtest/gtest.h>
 
-#include "mjukf/paper/rmse.hpp"
-#include "mjukf/paper/schedule.hpp"
 #include "mjukf/status.hpp"
+#include "paper/rmse.hpp"
+#include "paper/schedule.hpp"
 
 namespace {
 

@@ -21,8 +21,8 @@
 #include "mjukf/dual_ukf.hpp"
 #include "mjukf/joint_ukf.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
-#include "mjukf/paper/experiments.hpp"
 #include "mjukf/ukf.hpp"
+#include "paper/experiments.hpp"
 #include "robustness_support.hpp"
 #include "test_support.hpp"
 

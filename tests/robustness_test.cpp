@@ -17,10 +17,10 @@
 #include "mjukf/covariance_repair.hpp"
 #include "mjukf/detail/unscented_engine.hpp"  // CovarianceGuard
 #include "mjukf/measurement_gating.hpp"
-#include "mjukf/paper/experiments.hpp"
-#include "mjukf/paper/rmse.hpp"
-#include "mjukf/paper/schedule.hpp"
 #include "mjukf/simulation.hpp"
+#include "paper/experiments.hpp"
+#include "paper/rmse.hpp"
+#include "paper/schedule.hpp"
 #include "robustness_support.hpp"
 #include "test_support.hpp"
 
@@ -141,8 +141,8 @@ TEST(IndefiniteUpdate, FilterIsNeverLeftWithoutACholeskyFactor) {
                          k * h, truth, h);
     for (int call = 0; call < 2; ++call) {
       const auto before = filter;
-      const Status s = call == 0 ? filter.timeUpdate(k * h, h)
-                                 : filter.measurementUpdate(Oscillator().measurement(truth, {}));
+      const Status s =
+          call == 0 ? filter.timeUpdate(k * h, h) : filter.measurementUpdate(Oscillator().measurement(truth, {}));
       if (mjukf::taken(s)) {
         ++taken;
         timeUpdates += call == 0;
@@ -168,9 +168,9 @@ struct Case : mjukf::testing::PaperFilter<F, E> {
 };
 using Robot = mjukf::paper::FlexibleJointExperiment<double>;
 using Tank = mjukf::paper::CoupledTankExperiment<double>;
-using Cases = ::testing::Types<Case<mjukf::Ukf, Robot>, Case<mjukf::JointUkf, Robot>,
-                               Case<mjukf::ModifiedJointUkf, Robot>, Case<mjukf::Ukf, Tank>,
-                               Case<mjukf::JointUkf, Tank>, Case<mjukf::ModifiedJointUkf, Tank>>;
+using Cases =
+    ::testing::Types<Case<mjukf::Ukf, Robot>, Case<mjukf::JointUkf, Robot>, Case<mjukf::ModifiedJointUkf, Robot>,
+                     Case<mjukf::Ukf, Tank>, Case<mjukf::JointUkf, Tank>, Case<mjukf::ModifiedJointUkf, Tank>>;
 TYPED_TEST_SUITE(Hardening, Cases);
 
 // A measurement near the model's prediction, so the update is an ordinary one.
@@ -202,8 +202,8 @@ TYPED_TEST(Hardening, NonFiniteValueInEveryMeasurementComponent) {
       ASSERT_EQ(filter.timeUpdate(0.0, 1e-3), Status::Ok);
       auto y = plausibleMeasurement(filter);
       y(j) = bad;
-      expectNothingLost(filter, Status::NonFiniteMeasurement, [&](Filter& f) { return f.measurementUpdate(y); },
-                        "non-finite y");
+      expectNothingLost(
+          filter, Status::NonFiniteMeasurement, [&](Filter& f) { return f.measurementUpdate(y); }, "non-finite y");
       // The same component declared missing is ignored, whatever its value.
       ASSERT_EQ(filter.timeUpdate(0.0, 1e-3), Status::Ok);
       mjukf::MeasurementMask<Filter::MeasDim> present;
@@ -387,8 +387,10 @@ TYPED_TEST(FaultyModelOutput, IsRefusedInEveryComponentAndNothingIsLost) {
       plan = {Fault::Derivative, j, bad};
       const Status open = filter.propagateMean(0.0, 1e-3);
       plan = {};
-      if (!mjukf::taken(open)) ASSERT_TRUE(sameFilter(filter, beforeOpen));
-      else filter = beforeOpen;
+      if (!mjukf::taken(open))
+        ASSERT_TRUE(sameFilter(filter, beforeOpen));
+      else
+        filter = beforeOpen;
     }
     for (int j = 0; j < Filter::MeasDim; ++j) {
       ASSERT_EQ(filter.timeUpdate(0.0, 1e-3), Status::Ok);
@@ -543,8 +545,8 @@ TEST(Gating, AnOutlierIsRejectedAndNothingIsLost) {
   ASSERT_EQ(filter.timeUpdate(1.0, 1e-3), Status::Ok);
   auto outlier = data.at(1001);
   outlier(1) += 50.0;
-  expectNothingLost(filter, Status::MeasurementRejected, [&](Filter& f) { return f.measurementUpdate(outlier); },
-                    "outlier");
+  expectNothingLost(
+      filter, Status::MeasurementRejected, [&](Filter& f) { return f.measurementUpdate(outlier); }, "outlier");
   // With the outlying channel declared missing, the rest of the measurement is used.
   ASSERT_EQ(filter.timeUpdate(1.0, 1e-3), Status::Ok);
   EXPECT_EQ(filter.measurementUpdate(outlier, mjukf::MeasurementMask<2>(true, false)), Status::Ok);
@@ -605,8 +607,8 @@ void expectOutliersHandled(const char* name) {
   const double clean = tankRmse<F>(0.9999, 0.0, 41);
   const double gated = tankRmse<F>(0.9999, 0.01, 41);
   const double ungated = tankRmse<F>(0.0, 0.01, 41);
-  std::printf("%s: clean %.6g, 1%% outliers gated %.6g (ratio %.4f), ungated %.6g (ratio %.4f)\n", name, clean,
-              gated, gated / clean, ungated, ungated / clean);
+  std::printf("%s: clean %.6g, 1%% outliers gated %.6g (ratio %.4f), ungated %.6g (ratio %.4f)\n", name, clean, gated,
+              gated / clean, ungated, ungated / clean);
   EXPECT_LE(gated, 1.1 * clean);
   EXPECT_GT(ungated, 1.1 * clean) << "the outliers are not gross enough to test the gate";
 }

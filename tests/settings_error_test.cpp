@@ -14,8 +14,8 @@
 
 #include "mjukf/integrators/explicit_tr_bdf2.hpp"
 #include "mjukf/integrators/tr_bdf2.hpp"
-#include "mjukf/paper/experiments.hpp"
 #include "mjukf/simulation.hpp"
+#include "paper/experiments.hpp"
 #include "test_support.hpp"
 
 #if MJUKF_EXCEPTIONS
@@ -45,10 +45,14 @@ struct FilterKind {
     return estimatesParameters ? Experiment::initialParameters() : Model::trueParameters();
   }
   static const char* owner() {
-    if constexpr (std::is_same_v<Type, mjukf::Ukf<Model>>) return "mjukf::Ukf";
-    else if constexpr (std::is_same_v<Type, mjukf::JointUkf<Model>>) return "mjukf::JointUkf";
-    else if constexpr (std::is_same_v<Type, mjukf::ModifiedJointUkf<Model>>) return "mjukf::ModifiedJointUkf";
-    else return "mjukf::DualUkf";
+    if constexpr (std::is_same_v<Type, mjukf::Ukf<Model>>)
+      return "mjukf::Ukf";
+    else if constexpr (std::is_same_v<Type, mjukf::JointUkf<Model>>)
+      return "mjukf::JointUkf";
+    else if constexpr (std::is_same_v<Type, mjukf::ModifiedJointUkf<Model>>)
+      return "mjukf::ModifiedJointUkf";
+    else
+      return "mjukf::DualUkf";
   }
 };
 using FilterKinds = ::testing::Types<FilterKind<mjukf::Ukf>, FilterKind<mjukf::JointUkf>,
@@ -106,7 +110,8 @@ bool sameEstimate(const Filter& a, const Filter& b) {
 
 TYPED_TEST(SettingsErrorTest, ValidSettingsBuildAWorkingFilter) {
   using Filter = typename TypeParam::Type;
-  auto made = Filter::create(Model(), Experiment::initialState(), TypeParam::initialParameters(), TypeParam::settings());
+  auto made =
+      Filter::create(Model(), Experiment::initialState(), TypeParam::initialParameters(), TypeParam::settings());
   ASSERT_TRUE(made.ok()) << made.error().setting;
   EXPECT_FALSE(static_cast<bool>(made.error()));
   Filter& filter = *made;
@@ -211,7 +216,8 @@ void expectResetRefused(Filter& filter, const char* setting, const Args&... args
 
 TYPED_TEST(SettingsErrorTest, ResetReportsItsArgumentsAndChangesNothing) {
   using Filter = typename TypeParam::Type;
-  auto made = Filter::create(Model(), Experiment::initialState(), TypeParam::initialParameters(), TypeParam::settings());
+  auto made =
+      Filter::create(Model(), Experiment::initialState(), TypeParam::initialParameters(), TypeParam::settings());
   ASSERT_TRUE(made.ok());
   Filter& filter = *made;
   ASSERT_EQ(filter.timeUpdate(0.0, Experiment::stepSize), mjukf::Status::Ok);
@@ -264,7 +270,8 @@ TEST(SettingsError, SteppersAndSigmaPoints) {
 #if !MJUKF_EXCEPTIONS
   static_assert(!std::is_constructible_v<mjukf::ITrBdf2<double>, double>);
   static_assert(!std::is_constructible_v<mjukf::TrBdf2<double>, mjukf::TrBdf2Settings<double>>);
-  static_assert(!std::is_constructible_v<mjukf::MerweScaledSigmaPoints<double, 3>, mjukf::SigmaPointParameters<double>>);
+  static_assert(
+      !std::is_constructible_v<mjukf::MerweScaledSigmaPoints<double, 3>, mjukf::SigmaPointParameters<double>>);
 #endif
 }
 

@@ -2,13 +2,13 @@
 // (Wrong sizes cannot be written: every matrix in the settings is sized at compile time from the model.)
 
 #include <limits>
-#include <type_traits>
 #include <string>
+#include <type_traits>
 
 #include <gtest/gtest.h>
 
 #include "mjukf/integrators/i_tr_bdf2.hpp"
-#include "mjukf/paper/experiments.hpp"
+#include "paper/experiments.hpp"
 
 namespace {
 
@@ -30,8 +30,9 @@ template <class Settings, class Mutate>
 void expectJointRejected(Mutate&& mutate, const std::string& setting) {
   Settings s = Robot::jointUkf();
   mutate(s);
-  expectRejected([&] { mjukf::JointUkf<Robot::Model>(Robot::Model(), Robot::initialState(), Robot::initialParameters(), s); },
-                 setting);
+  expectRejected(
+      [&] { mjukf::JointUkf<Robot::Model>(Robot::Model(), Robot::initialState(), Robot::initialParameters(), s); },
+      setting);
 }
 
 template <class Mutate>
@@ -39,7 +40,9 @@ void expectModifiedRejected(Mutate&& mutate, const std::string& setting) {
   auto s = Robot::modifiedJointUkf();
   mutate(s);
   expectRejected(
-      [&] { mjukf::ModifiedJointUkf<Robot::Model>(Robot::Model(), Robot::initialState(), Robot::initialParameters(), s); },
+      [&] {
+        mjukf::ModifiedJointUkf<Robot::Model>(Robot::Model(), Robot::initialState(), Robot::initialParameters(), s);
+      },
       setting);
 }
 
@@ -55,8 +58,8 @@ void expectDualRejected(Mutate&& mutate, const std::string& setting,
 using JointSettings = mjukf::JointUkfSettingsFor<Robot::Model>;
 
 TEST(SettingsValidation, PaperSettingsAreAccepted) {
-  EXPECT_NO_THROW(mjukf::Ukf<Robot::Model>(Robot::Model(), Robot::initialState(), Robot::Model::trueParameters(),
-                                           Robot::ukf()));
+  EXPECT_NO_THROW(
+      mjukf::Ukf<Robot::Model>(Robot::Model(), Robot::initialState(), Robot::Model::trueParameters(), Robot::ukf()));
   EXPECT_NO_THROW(mjukf::JointUkf<Robot::Model>(Robot::Model(), Robot::initialState(), Robot::initialParameters(),
                                                 Robot::jointUkf()));
   EXPECT_NO_THROW(mjukf::ModifiedJointUkf<Robot::Model>(Robot::Model(), Robot::initialState(),
@@ -67,8 +70,8 @@ TEST(SettingsValidation, PaperSettingsAreAccepted) {
   EXPECT_NO_THROW(
       mjukf::DualUkf<Tank::Model>(Tank::Model(), Tank::initialState(), Tank::initialParameters(), Tank::dualUkf()));
   using TankF = mjukf::paper::CoupledTankExperiment<float>;
-  EXPECT_NO_THROW(
-      mjukf::DualUkf<TankF::Model>(TankF::Model(), TankF::initialState(), TankF::initialParameters(), TankF::dualUkf()));
+  EXPECT_NO_THROW(mjukf::DualUkf<TankF::Model>(TankF::Model(), TankF::initialState(), TankF::initialParameters(),
+                                               TankF::dualUkf()));
 }
 
 TEST(SettingsValidation, InitialCovarianceMustBeSymmetricPositiveDefinite) {
@@ -90,7 +93,8 @@ TEST(SettingsValidation, ProcessNoiseMustBeSymmetricPositiveSemiDefinite) {
   // Zero process noise is semi-definite and legal.
   JointSettings zeroQ = Robot::jointUkf();
   zeroQ.processNoise.setZero();
-  EXPECT_NO_THROW(mjukf::JointUkf<Robot::Model>(Robot::Model(), Robot::initialState(), Robot::initialParameters(), zeroQ));
+  EXPECT_NO_THROW(
+      mjukf::JointUkf<Robot::Model>(Robot::Model(), Robot::initialState(), Robot::initialParameters(), zeroQ));
 }
 
 TEST(SettingsValidation, MeasurementNoiseMustBeSymmetricPositiveDefinite) {
@@ -106,10 +110,12 @@ TEST(SettingsValidation, SmallMatricesAreCheckedRelativeToTheirScale) {
   using TankD = mjukf::paper::CoupledTankExperiment<double>;
   auto reject = [](auto settings, const std::string& setting) {
     using Experiment = std::conditional_t<std::is_same_v<typename decltype(settings)::Scalar, float>, TankF, TankD>;
-    expectRejected([&] { mjukf::ModifiedJointUkf<typename Experiment::Model>(typename Experiment::Model(),
-                                                                           Experiment::initialState(),
-                                                                           Experiment::initialParameters(), settings); },
-                   setting);
+    expectRejected(
+        [&] {
+          mjukf::ModifiedJointUkf<typename Experiment::Model>(typename Experiment::Model(), Experiment::initialState(),
+                                                              Experiment::initialParameters(), settings);
+        },
+        setting);
   };
   auto asymmetricR = TankF::modifiedJointUkf();
   asymmetricR.measurementNoise(0, 1) = 5e-8f;
@@ -123,21 +129,25 @@ TEST(SettingsValidation, SmallMatricesAreCheckedRelativeToTheirScale) {
   auto tinyValidR = TankD::modifiedJointUkf();
   tinyValidR.measurementNoise *= 1e-9;  // R = 1e-16 I is legal, however small
   EXPECT_NO_THROW(mjukf::ModifiedJointUkf<TankD::Model>(TankD::Model(), TankD::initialState(),
-                                                         TankD::initialParameters(), tinyValidR));
+                                                        TankD::initialParameters(), tinyValidR));
 }
 
 TEST(SettingsValidation, SigmaPointScaling) {
   expectJointRejected<JointSettings>([](auto& s) { s.sigmaPoints.alpha = 0.0; }, "alpha");
   expectJointRejected<JointSettings>([](auto& s) { s.sigmaPoints.alpha = kNan; }, "alpha");
   expectJointRejected<JointSettings>([](auto& s) { s.sigmaPoints.kappa = -6.0; }, "kappa");  // L + λ = 0 for L = 6
-  expectModifiedRejected([](auto& s) { s.sigmaPoints.kappa = -4.5; }, "kappa");             // L + λ < 0 for L = 4
+  expectModifiedRejected([](auto& s) { s.sigmaPoints.kappa = -4.5; }, "kappa");              // L + λ < 0 for L = 4
   expectModifiedRejected([](auto& s) { s.sigmaPoints.beta = kNan; }, "beta");
 }
 
 TEST(SettingsValidation, ModifiedJointSettings) {
   expectModifiedRejected([](auto& s) { s.transformation(0, 0) = 0.4; }, "transformation");  // row sums to 1.1
-  expectModifiedRejected([](auto& s) { s.transformation = s.transformation.reverse().eval(); s.transformation(1, 3) = 0.5; },
-                         "transformation");
+  expectModifiedRejected(
+      [](auto& s) {
+        s.transformation = s.transformation.reverse().eval();
+        s.transformation(1, 3) = 0.5;
+      },
+      "transformation");
   expectModifiedRejected([](auto& s) { s.transformation(1, 1) = kNan; }, "transformation");
   expectModifiedRejected([](auto& s) { s.scaling = kNan; }, "scaling");
   expectModifiedRejected([](auto& s) { s.parameterSpread(1) = std::numeric_limits<double>::infinity(); },
@@ -147,12 +157,15 @@ TEST(SettingsValidation, ModifiedJointSettings) {
 TEST(SettingsValidation, InitialValuesMustBeFinite) {
   Robot::State x0 = Robot::initialState();
   x0(2) = kNan;
-  expectRejected([&] { mjukf::JointUkf<Robot::Model>(Robot::Model(), x0, Robot::initialParameters(), Robot::jointUkf()); },
-                 "initialState");
+  expectRejected(
+      [&] { mjukf::JointUkf<Robot::Model>(Robot::Model(), x0, Robot::initialParameters(), Robot::jointUkf()); },
+      "initialState");
   Robot::Param theta0 = Robot::initialParameters();
   theta0(1) = kNan;
   expectRejected(
-      [&] { mjukf::ModifiedJointUkf<Robot::Model>(Robot::Model(), Robot::initialState(), theta0, Robot::modifiedJointUkf()); },
+      [&] {
+        mjukf::ModifiedJointUkf<Robot::Model>(Robot::Model(), Robot::initialState(), theta0, Robot::modifiedJointUkf());
+      },
       "initialParameters");
   expectRejected([&] { mjukf::Ukf<Robot::Model>(Robot::Model(), Robot::initialState(), theta0, Robot::ukf()); },
                  "parameters");
@@ -191,8 +204,12 @@ TEST(SettingsValidation, DualUkfParameterFilterSettings) {
   // The first guess within the bounds, and the bounds themselves.
   expectDualRejected([](auto& s) { s.parameterBounds.lower << 0.12, 0.0; }, "initialParameters");
   expectDualRejected([](auto& s) { s.parameterBounds.upper << 1.0, 0.14; }, "initialParameters");
-  expectDualRejected([](auto& s) { s.parameterBounds.lower << 0.2, 0.0; s.parameterBounds.upper << 0.1, 1.0; },
-                     "parameterBounds");
+  expectDualRejected(
+      [](auto& s) {
+        s.parameterBounds.lower << 0.2, 0.0;
+        s.parameterBounds.upper << 0.1, 1.0;
+      },
+      "parameterBounds");
   expectDualRejected([](auto& s) { s.parameterBounds.upper(1) = kNan; }, "parameterBounds");
   // The initial values.
   expectDualRejected([](auto&) {}, "initialParameters", Robot::Param(0.1, kNan));

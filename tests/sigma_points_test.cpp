@@ -18,8 +18,8 @@ using mjukf::Status;
 constexpr double kTight = 1e-12;
 
 // The (α, β, κ) combinations the tests sweep: the paper's, and ones with a negative or large λ.
-const SigmaPointParameters<double> kParameterSets[] = {{1.0, 2.0, 0.0}, {0.5, 2.0, 1.0}, {1e-2, 2.0, 0.0},
-                                                       {1.0, 0.0, 3.0}, {2.0, 2.0, -1.0}};
+const SigmaPointParameters<double> kParameterSets[] = {
+    {1.0, 2.0, 0.0}, {0.5, 2.0, 1.0}, {1e-2, 2.0, 0.0}, {1.0, 0.0, 3.0}, {2.0, 2.0, -1.0}};
 
 // Rounding in a sum of weights of either sign grows with the sum of their magnitudes: ~1/α² for small α.
 double sumRoundingBound(const Eigen::VectorXd& terms) {
@@ -83,7 +83,7 @@ TEST(SigmaPoints, ReproduceRandomCorrelatedCovariances) {
 
 TEST(SigmaPoints, UseColumnsOfTheLowerCholeskyFactor) {
   Eigen::Matrix2d cov;
-  cov << 4.0, 2.0, 2.0, 5.0;  // S = [2 0; 1 2]
+  cov << 4.0, 2.0, 2.0, 5.0;                // S = [2 0; 1 2]
   MerweScaledSigmaPoints<double, 2> sigma;  // γ = √2
   MerweScaledSigmaPoints<double, 2>::Points points;
   ASSERT_EQ(sigma.generate(Eigen::Vector2d::Zero(), cov, points), Status::Ok);
@@ -105,8 +105,8 @@ TEST(SigmaPoints, RefuseCovarianceWithoutCholeskyFactorAndLeavePointsAlone) {
   Eigen::Matrix2d withNan = Eigen::Matrix2d::Identity();
   withNan(1, 1) = std::numeric_limits<double>::quiet_NaN();
   EXPECT_EQ(sigma.generate(Eigen::Vector2d::Zero(), withNan, points), Status::NotPositiveDefinite);
-  EXPECT_EQ(sigma.generate(Eigen::Vector2d(0.0, std::numeric_limits<double>::infinity()),
-                           Eigen::Matrix2d::Identity(), points),
+  EXPECT_EQ(sigma.generate(Eigen::Vector2d(0.0, std::numeric_limits<double>::infinity()), Eigen::Matrix2d::Identity(),
+                           points),
             Status::NotPositiveDefinite);
   EXPECT_EQ(points, before);
 }

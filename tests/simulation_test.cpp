@@ -60,7 +60,9 @@ TEST(Simulation, LinearDecayWithRk4IsWithinItsErrorBound) {
   const long steps = 40;
   std::vector<Row> rows;
   const auto last = mjukf::simulate(Decay(), mjukf::Rk4<double>(), Vec1(x0), Vec1(lambda), t0, h, steps,
-                                    [&](long k, double t, const Decay::State& x) { rows.push_back({k, t, x(0)}); });
+                                    [&](long k, double t, const Decay::State& x) {
+                                      rows.push_back({k, t, x(0)});
+                                    });
   ASSERT_EQ(rows.size(), std::size_t(steps + 1));
   const double z = lambda * h;
   double largest = 0;
@@ -108,18 +110,18 @@ TEST(Simulation, HeldAndCallableInputs) {
   const long steps = 100;
   const Vec1 none(0.0);
   const auto ignore = [](long, double, const Driven::State&) {};
-  const auto held = mjukf::simulate(Driven(), mjukf::Rk4<double>(), Vec1(0.5), Driven::Input(2.0), none, t0, h, steps,
-                                    ignore);
+  const auto held =
+      mjukf::simulate(Driven(), mjukf::Rk4<double>(), Vec1(0.5), Driven::Input(2.0), none, t0, h, steps, ignore);
   EXPECT_NEAR(held(0), 0.5 + 2.0 * double(steps) * h, 1e-12);
   // An expression convertible to the input is a held input too.
-  const auto zero = mjukf::simulate(Driven(), mjukf::Rk4<double>(), Vec1(0.5), Driven::Input::Zero(), none, t0, h,
-                                    steps, ignore);
+  const auto zero =
+      mjukf::simulate(Driven(), mjukf::Rk4<double>(), Vec1(0.5), Driven::Input::Zero(), none, t0, h, steps, ignore);
   EXPECT_EQ(zero(0), 0.5);
   // A callable input equal to the model's signal gives the model's signal's result bit for bit.
   const Driven model;
   const auto signal = mjukf::simulate(model, mjukf::Rk4<double>(), Vec1(0.5), none, t0, h, steps, ignore);
-  const auto callable = mjukf::simulate(model, mjukf::Rk4<double>(), Vec1(0.5),
-                                        [&](double t) { return model.input(t); }, none, t0, h, steps, ignore);
+  const auto callable = mjukf::simulate(
+      model, mjukf::Rk4<double>(), Vec1(0.5), [&](double t) { return model.input(t); }, none, t0, h, steps, ignore);
   EXPECT_TRUE(bitwiseSame(signal, callable));
 }
 
@@ -158,7 +160,9 @@ TEST(Simulation, ParameterCallableSwitchesAtTheRightRow) {
 TEST(Simulation, ZeroStepsVisitsTheInitialStateOnlyAndNegativeIsRefused) {
   std::vector<Row> rows;
   const auto x = mjukf::simulate(Decay(), mjukf::Rk4<double>(), Vec1(2.0), Vec1(1.0), 3.0, 0.1, 0,
-                                 [&](long k, double t, const Decay::State& xk) { rows.push_back({k, t, xk(0)}); });
+                                 [&](long k, double t, const Decay::State& xk) {
+                                   rows.push_back({k, t, xk(0)});
+                                 });
   ASSERT_EQ(rows.size(), 1u);
   EXPECT_EQ(rows[0].k, 0);
   EXPECT_EQ(rows[0].t, 3.0);

@@ -99,13 +99,9 @@ void expectUkfEqualsKalmanFilter(const mjukf::SigmaPointParameters<double>& sigm
   }
 }
 
-TEST(Ukf, EqualsKalmanFilterOnLinearModelFullyObserved) {
-  expectUkfEqualsKalmanFilter<3>({1.0, 2.0, 0.0}, 1);
-}
+TEST(Ukf, EqualsKalmanFilterOnLinearModelFullyObserved) { expectUkfEqualsKalmanFilter<3>({1.0, 2.0, 0.0}, 1); }
 
-TEST(Ukf, EqualsKalmanFilterOnLinearModelPartiallyObserved) {
-  expectUkfEqualsKalmanFilter<1>({1.0, 2.0, 0.0}, 1);
-}
+TEST(Ukf, EqualsKalmanFilterOnLinearModelPartiallyObserved) { expectUkfEqualsKalmanFilter<1>({1.0, 2.0, 0.0}, 1); }
 
 TEST(Ukf, EqualsKalmanFilterWithOtherScalings) {
   expectUkfEqualsKalmanFilter<3>({0.5, 2.0, 1.0}, 1);

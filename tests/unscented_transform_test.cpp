@@ -52,8 +52,7 @@ TEST(UnscentedTransform, CapturesSecondOrderTermOfQuadraticMap) {
   mjukf::MerweScaledSigmaPoints<double, 1> sigma;
   mjukf::MerweScaledSigmaPoints<double, 1>::Points points;
   const double m = 1.5, s2 = 0.25;
-  ASSERT_EQ(sigma.generate(Eigen::Matrix<double, 1, 1>(m), Eigen::Matrix<double, 1, 1>(s2), points),
-            mjukf::Status::Ok);
+  ASSERT_EQ(sigma.generate(Eigen::Matrix<double, 1, 1>(m), Eigen::Matrix<double, 1, 1>(s2), points), mjukf::Status::Ok);
   const Eigen::Matrix<double, 1, 3> images = points.array().square().matrix();
   Eigen::Matrix<double, 1, 1> mean, cov;
   mjukf::unscentedTransform(images, sigma.meanWeights(), sigma.covarianceWeights(), mean, cov);

@@ -5,11 +5,11 @@
 // the baseline the flash figures subtract), the program
 //   1. asks the factory for a filter with a broken R and checks that it names the setting (the
 //      exception-free validation path, on the target);
-//   2. builds the filter with the robot's settings (include/mjukf/paper/experiments.hpp) by create();
+//   2. builds the filter with the robot's settings (examples/support/paper/experiments.hpp) by create();
 //   3. simulates the robot in float with the true parameters (0.15, 0.21) at h = 1 ms, measures every
 //      state with Gaussian noise of σ = 0.03 from a fixed-seed xorshift generator, and runs the paper's
-//      schedule (a time and measurement update every 5 rows, open-loop propagation between; the
-//      library's paper::runSchedule) over 20 s;
+//      schedule (a time and measurement update every 5 rows, open-loop propagation between;
+//      paper::runSchedule of examples/support/paper/) over 20 s;
 //   4. checks that the parameter estimates end near the truth;
 //   5. prints the estimate every second as the bits of each float, and the filter's figures: sizeof,
 //      SysTick ticks of its measurement steps and open-loop steps, the stack high-water mark of a
@@ -22,9 +22,9 @@
 #include <cstdint>
 #include <cstring>
 
-#include "mjukf/paper/experiments.hpp"
-#include "mjukf/paper/schedule.hpp"
 #include "mjukf/simulation.hpp"
+#include "paper/experiments.hpp"
+#include "paper/schedule.hpp"
 #include "platform.hpp"
 
 #ifndef EMBEDDED_FILTERS
@@ -33,8 +33,8 @@
 
 namespace {
 
-constexpr long kRows = 20001;        // 20 s at h = 1 ms, row 0 the initial estimate
-constexpr long kPrintEvery = 1000;   // one estimate line a second
+constexpr long kRows = 20001;       // 20 s at h = 1 ms, row 0 the initial estimate
+constexpr long kPrintEvery = 1000;  // one estimate line a second
 constexpr std::uint32_t kStackPaintDepth = 8192;
 
 // ---- Output without stdio ------------------------------------------------------------------------
@@ -62,7 +62,8 @@ class Line {
     Bits b;
     std::memcpy(&b, &value, sizeof b);
     put(' ');
-    for (int shift = 8 * static_cast<int>(sizeof b) - 4; shift >= 0; shift -= 4) put("0123456789abcdef"[(b >> shift) & 0xF]);
+    for (int shift = 8 * static_cast<int>(sizeof b) - 4; shift >= 0; shift -= 4)
+      put("0123456789abcdef"[(b >> shift) & 0xF]);
     return *this;
   }
   void write() {
@@ -258,7 +259,7 @@ bool runAll() {
     ok &= runFilter<Scalar, mjukf::JointUkf<Model>>("jukf", Experiment::initialParameters(), Experiment::jointUkf());
   if constexpr ((EMBEDDED_FILTERS & 4) != 0)
     ok &= runFilter<Scalar, mjukf::ModifiedJointUkf<Model>>("mjukf", Experiment::initialParameters(),
-                                                             Experiment::modifiedJointUkf());
+                                                            Experiment::modifiedJointUkf());
   if constexpr ((EMBEDDED_FILTERS & 8) != 0)
     ok &= runFilter<Scalar, mjukf::DualUkf<Model>>("dual", Experiment::initialParameters(), Experiment::dualUkf());
   if constexpr (EMBEDDED_FILTERS == 0) {  // the baseline: the plant and the output alone

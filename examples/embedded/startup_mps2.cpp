@@ -1,7 +1,7 @@
 // The minimal start-up of the firmware example on QEMU's mps2-an386 (Cortex-M4F): a vector table with
 // the initial stack pointer and the reset handler, which copies .data, zeroes .bss, turns the FPU on,
-// runs the static constructors and calls the program (embedded::programMain, platform.hpp). Every other exception ends the program through
-// semihosting with a failure (a fault is a failed run, never a hang).
+// runs the static constructors and calls the program (embedded::programMain, platform.hpp). Every other exception ends
+// the program through semihosting with a failure (a fault is a failed run, never a hang).
 
 #include <cstdint>
 
@@ -37,7 +37,20 @@ extern "C" [[noreturn]] void resetHandler() {
 
 // Initial SP, reset, then NMI … SysTick (14 system exceptions): all faults end the run.
 using Vector = void (*)();
-extern "C" __attribute__((section(".vectors"), used)) const Vector vectorTable[16] = {
-    reinterpret_cast<Vector>(__stack_top), resetHandler, faultHandler, faultHandler, faultHandler, faultHandler,
-    faultHandler, nullptr, nullptr, nullptr, nullptr, faultHandler, faultHandler, nullptr, faultHandler,
-    faultHandler};
+extern "C" __attribute__((section(".vectors"), used))
+const Vector vectorTable[16] = {reinterpret_cast<Vector>(__stack_top),
+                                resetHandler,
+                                faultHandler,
+                                faultHandler,
+                                faultHandler,
+                                faultHandler,
+                                faultHandler,
+                                nullptr,
+                                nullptr,
+                                nullptr,
+                                nullptr,
+                                faultHandler,
+                                faultHandler,
+                                nullptr,
+                                faultHandler,
+                                faultHandler};

@@ -27,7 +27,7 @@ template <class Scalar>
 struct CovarianceRepair {
   int maxAttempts = 3;  ///< 0 disables the repair: a P without a factor is always refused.
   Scalar firstJitter = Scalar(16) * std::numeric_limits<Scalar>::epsilon();  ///< relative to mean |Pᵢᵢ|, > 0
-  Scalar growth = Scalar(100);  ///< factor between attempts, ≥ 1
+  Scalar growth = Scalar(100);                                               ///< factor between attempts, ≥ 1
 };
 
 /// \cond INTERNAL
@@ -35,7 +35,8 @@ namespace detail {
 
 template <class Scalar>
 SettingsError validateRepair(const char* owner, const CovarianceRepair<Scalar>& repair) {
-  if (repair.maxAttempts < 0 || repair.maxAttempts > 64) return invalid(owner, "repair.maxAttempts", "must be in [0, 64]");
+  if (repair.maxAttempts < 0 || repair.maxAttempts > 64)
+    return invalid(owner, "repair.maxAttempts", "must be in [0, 64]");
   if (SettingsError e = requireFinite(owner, "repair.firstJitter", repair.firstJitter)) return e;
   if (SettingsError e = requireFinite(owner, "repair.growth", repair.growth)) return e;
   if (!(repair.firstJitter > 0)) return invalid(owner, "repair.firstJitter", "must be positive");

@@ -56,10 +56,8 @@ struct DualUkfSettings : ParameterEstimationSettings<Scalar_, StateDim, MeasDim,
   /// Whether the state's time update uses θ̂_{k−1} or the corrected θ̂_k (see DualUkfOrdering).
   DualUkfOrdering ordering = DualUkfOrdering::PriorParameters;
 };
-/// The settings of `DualUkf<Model>`.
-template <class Model>
-using DualUkfSettingsFor = DualUkfSettings<typename Model::Scalar, Model::StateDim, Model::ParamDim, Model::MeasDim>;
 
+/// \cond INTERNAL
 namespace detail {
 
 /// The parameter policy of `DualUkf` (docs/algorithms.md §9): a second unscented estimate, of θ, with a
@@ -284,6 +282,7 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
 };
 
 }  // namespace detail
+/// \endcond
 
 /// Dual unscented Kalman filter: a UKF of the state x run with the current parameter estimate θ̂, and a
 /// UKF of θ (a random walk) that observes the measurement through the state filter's prediction:
@@ -304,9 +303,10 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
 /// filter has the state filter's set and form.
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled,
           class Form = FullCovariance>
-class DualUkf
-    : public detail::EngineOf<DualUkf<Model_, Integrator_, PointSet, Form>, Model_, Integrator_,
-                              DualUkfSettingsFor<Model_>, detail::DualParameters, Model_::StateDim, PointSet, Form> {
+class DualUkf : public detail::EngineOf<
+                    DualUkf<Model_, Integrator_, PointSet, Form>, Model_, Integrator_,
+                    DualUkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::ParamDim, Model_::MeasDim>,
+                    detail::DualParameters, Model_::StateDim, PointSet, Form> {
   static_assert(checkModel<Model_, 1>());
   using Engine = typename DualUkf::UnscentedEngine;
   using Policy = typename Engine::PolicyType;
@@ -318,7 +318,7 @@ class DualUkf
   using typename Engine::Input, typename Engine::Meas, typename Engine::Param, typename Engine::Scalar,
       typename Engine::State;
   /// The settings struct of this filter.
-  using Settings = DualUkfSettingsFor<Model_>;
+  using Settings = DualUkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::ParamDim, Model_::MeasDim>;
   /// n, p and m: the model's sizes.
   using Engine::StateDim, Engine::ParamDim, Engine::MeasDim;
   /// The number of sigma points of the state filter.
@@ -396,5 +396,9 @@ class DualUkf
 
   static const State& initialMean(const State& initialState, const Param&) { return initialState; }
 };
+
+/// The settings of `DualUkf<Model>`.
+template <class Model>
+using DualUkfSettingsFor = DualUkfSettings<typename Model::Scalar, Model::StateDim, Model::ParamDim, Model::MeasDim>;
 
 }  // namespace mjukf

@@ -25,7 +25,7 @@ struct UnscentedSettings {
   /// The type of R (m × m).
   using MeasMatrix = Eigen::Matrix<Scalar, MeasDim, MeasDim>;
 
-  SigmaPointParameters<Scalar> sigmaPoints;                        ///< α, β, κ
+  SigmaPointParameters<Scalar> sigmaPoints;                       ///< α, β, κ
   CovarianceMatrix initialCovariance = CovarianceMatrix::Zero();  ///< P₀, symmetric positive definite
   CovarianceMatrix processNoise = CovarianceMatrix::Zero();       ///< Q, symmetric positive semi-definite
   MeasMatrix measurementNoise = MeasMatrix::Zero();               ///< R, symmetric positive definite

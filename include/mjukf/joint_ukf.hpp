@@ -25,10 +25,8 @@ struct JointUkfSettings : ParameterEstimationSettings<Scalar, StateDim + ParamDi
   /// The type of P₀ and Q of [x; θ].
   using AugmentedMatrix = Eigen::Matrix<Scalar, AugmentedDim, AugmentedDim>;
 };
-/// The settings of `JointUkf<Model>`.
-template <class Model>
-using JointUkfSettingsFor = JointUkfSettings<typename Model::Scalar, Model::StateDim, Model::ParamDim, Model::MeasDim>;
 
+/// \cond INTERNAL
 namespace detail {
 
 /// The parameter policy of `JointUkf`: θ is the tail of the augmented vector [x; θ], constant in the
@@ -36,14 +34,13 @@ namespace detail {
 /// a policy supplies).
 template <class Model, class Integrator, class Settings, class Est>
 class AugmentedParameters : public ParameterPolicy<Model, Integrator, Settings, Est> {
-  using Base = ParameterPolicy<Model, Integrator, Settings, Est>;
-
  public:
+  AugmentedParameters(const Settings& settings, const typename Model::Param&)
+      : bounds_(settings.parameterBounds), boundsActive_(settings.parameterBounds.active()) {}
+
+  using Base = ParameterPolicy<Model, Integrator, Settings, Est>;
   using Base::StateDim, Base::ParamDim;
   using typename Base::Param, typename Base::Points, typename Base::MeasPoints, typename Base::Vector;
-
-  AugmentedParameters(const Settings& settings, const Param&)
-      : bounds_(settings.parameterBounds), boundsActive_(settings.parameterBounds.active()) {}
 
   template <class Step>
   Status predictParameters(const Step&, const Est&) {
@@ -88,6 +85,7 @@ class AugmentedParameters : public ParameterPolicy<Model, Integrator, Settings, 
 };
 
 }  // namespace detail
+/// \endcond
 
 /// Joint unscented Kalman filter: estimates z = [x; θ] with L = n + p, the parameters constant in the
 /// model (θ̇ = 0). A time update costs 2(n + p) + 1 model propagations.
@@ -103,19 +101,19 @@ class AugmentedParameters : public ParameterPolicy<Model, Integrator, Settings, 
 /// (covariance_form.hpp): `FullCovariance`, the default, or `SquareRootCovariance`.
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled,
           class Form = FullCovariance>
-class JointUkf : public detail::EngineOf<JointUkf<Model_, Integrator_, PointSet, Form>, Model_, Integrator_,
-                                         JointUkfSettingsFor<Model_>, detail::AugmentedParameters,
-                                         Model_::StateDim + Model_::ParamDim, PointSet, Form> {
+class JointUkf : public detail::EngineOf<
+                     JointUkf<Model_, Integrator_, PointSet, Form>, Model_, Integrator_,
+                     JointUkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::ParamDim, Model_::MeasDim>,
+                     detail::AugmentedParameters, Model_::StateDim + Model_::ParamDim, PointSet, Form> {
   static_assert(checkModel<Model_, 1>());
   using Engine = typename JointUkf::UnscentedEngine;
   friend Engine;
-  friend typename Engine::PolicyType;
 
  public:
   /// The model's scalar and vector types (see the engine, detail/unscented_engine.hpp).
   using typename Engine::Param, typename Engine::Scalar, typename Engine::State;
   /// The settings struct of this filter.
-  using Settings = JointUkfSettingsFor<Model_>;
+  using Settings = JointUkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::ParamDim, Model_::MeasDim>;
   /// n and p: the model's sizes.
   using Engine::StateDim, Engine::ParamDim;
   /// n + p, the dimension of the augmented vector [x; θ].
@@ -178,5 +176,9 @@ class JointUkf : public detail::EngineOf<JointUkf<Model_, Integrator_, PointSet,
     return z;
   }
 };
+
+/// The settings of `JointUkf<Model>`.
+template <class Model>
+using JointUkfSettingsFor = JointUkfSettings<typename Model::Scalar, Model::StateDim, Model::ParamDim, Model::MeasDim>;
 
 }  // namespace mjukf

@@ -1,21 +1,22 @@
 #pragma once
 
 /// \file
-/// Umbrella header: the whole core API of mjukf. The paper's experiments, schedule and RMSE are a
-/// layer of their own, `mjukf/paper/paper.hpp`.
+/// Umbrella header: the whole core API of mjukf, the filters, their settings, the steppers and the
+/// concepts they rest on. Not included: the example plants (`mjukf/models/<plant>.hpp`, each included
+/// on its own) and the SUNDIALS adapter (`mjukf/sundials/cvode.hpp`, which needs SUNDIALS).
 
 #include "mjukf/covariance_form.hpp"
+#include "mjukf/covariance_repair.hpp"
 #include "mjukf/diagnostics.hpp"
 #include "mjukf/dual_ukf.hpp"
 #include "mjukf/filter_settings.hpp"
 #include "mjukf/integrators/integrators.hpp"
 #include "mjukf/joint_ukf.hpp"
+#include "mjukf/measurement_gating.hpp"
 #include "mjukf/model.hpp"
-#include "mjukf/models/coupled_tank.hpp"
-#include "mjukf/models/flexible_joint.hpp"
-#include "mjukf/models/lorenz.hpp"
-#include "mjukf/models/van_der_pol.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
+#include "mjukf/parameter_bounds.hpp"
+#include "mjukf/parameter_sensitivity.hpp"
 #include "mjukf/result.hpp"
 #include "mjukf/settings_error.hpp"
 #include "mjukf/sigma_points.hpp"

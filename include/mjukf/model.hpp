@@ -55,20 +55,18 @@ namespace detail {
 template <class T, class = void>
 struct HasInputSignal : std::false_type {};
 template <class T>
-struct HasInputSignal<T, std::void_t<decltype(std::declval<const T&>().input(
-                             std::declval<typename T::Scalar>()))>> : std::true_type {};
+struct HasInputSignal<T, std::void_t<decltype(std::declval<const T&>().input(std::declval<typename T::Scalar>()))>>
+    : std::true_type {};
 
 template <class T, class = void>
 struct HasDerivative : std::false_type {};
 template <class T>
 struct HasDerivative<T, std::void_t<decltype(std::declval<const T&>().derivative(
                             std::declval<typename T::Scalar>(), std::declval<const typename T::State&>(),
-                            std::declval<const typename T::Input&>(),
-                            std::declval<const typename T::Param&>()))>>
+                            std::declval<const typename T::Input&>(), std::declval<const typename T::Param&>()))>>
     : std::is_convertible<decltype(std::declval<const T&>().derivative(
                               std::declval<typename T::Scalar>(), std::declval<const typename T::State&>(),
-                              std::declval<const typename T::Input&>(),
-                              std::declval<const typename T::Param&>())),
+                              std::declval<const typename T::Input&>(), std::declval<const typename T::Param&>())),
                           typename T::State> {};
 
 template <class T, class = void>
@@ -88,11 +86,9 @@ template <class T, class = void>
 struct HasMeasurement : std::false_type {};
 template <class T>
 struct HasMeasurement<T, std::void_t<decltype(std::declval<const T&>().measurement(
-                             std::declval<const typename T::State&>(),
-                             std::declval<const typename T::Param&>()))>>
-    : std::is_convertible<decltype(std::declval<const T&>().measurement(
-                              std::declval<const typename T::State&>(),
-                              std::declval<const typename T::Param&>())),
+                             std::declval<const typename T::State&>(), std::declval<const typename T::Param&>()))>>
+    : std::is_convertible<decltype(std::declval<const T&>().measurement(std::declval<const typename T::State&>(),
+                                                                        std::declval<const typename T::Param&>())),
                           typename T::Meas> {};
 
 template <class Scalar, int Rows>
@@ -126,8 +122,8 @@ struct NoIntegrator {
 /// The integrator a filter uses when none is named: the paper's I-TR-BDF2 (first order; see
 /// docs/integrators.md for the others) for a continuous model, none for a discrete-time one.
 template <class Model>
-using DefaultIntegrator = std::conditional_t<isDiscreteTime<Model>, NoIntegrator<typename Model::Scalar>,
-                                             ITrBdf2<typename Model::Scalar>>;
+using DefaultIntegrator =
+    std::conditional_t<isDiscreteTime<Model>, NoIntegrator<typename Model::Scalar>, ITrBdf2<typename Model::Scalar>>;
 
 /// Checks the model concept at compile time; every filter calls it. `MinParamDim` is 1 for the joint
 /// filters, which estimate parameters, and 0 for the plain UKF.
@@ -158,7 +154,6 @@ constexpr bool checkModel() {
                 "Model needs `Meas measurement(const State&, const Param&) const`");
   return true;
 }
-
 
 /// \cond INTERNAL
 namespace detail {
@@ -204,7 +199,9 @@ typename Model::State stepModel(const Model& model, const Integrator& integrator
     static_cast<void>(integrator);
     return model.transition(t, h, x, input(t), theta);  // the input at the start of the step
   } else {
-    const auto rhs = [&](Scalar time, const State& z) -> State { return model.derivative(time, z, input(time), theta); };
+    const auto rhs = [&](Scalar time, const State& z) -> State {
+      return model.derivative(time, z, input(time), theta);
+    };
     return integrator.step(rhs, t, x, h);
   }
 }

@@ -60,11 +60,8 @@ struct ModifiedJointUkfSettings : ParameterEstimationSettings<Scalar_, StateDim,
   /// time update (p extra propagations each) and kept in between; 0: once, at the first time update.
   int sensitivityInterval = 1;
 };
-/// The settings of `ModifiedJointUkf<Model>`.
-template <class Model>
-using ModifiedJointUkfSettingsFor =
-    ModifiedJointUkfSettings<typename Model::Scalar, Model::StateDim, Model::ParamDim, Model::MeasDim>;
 
+/// \cond INTERNAL
 namespace detail {
 
 /// The parameter policy of `ModifiedJointUkf` (docs/algorithms.md §5): every sigma point χᵢ carries its
@@ -243,6 +240,7 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
 };
 
 }  // namespace detail
+/// \endcond
 
 /// Modified joint unscented Kalman filter. Sigma points are drawn for the state alone (L = n, 2n + 1
 /// points); point i is propagated with its own parameter vector θᵢ, and the θᵢ are moved against the
@@ -271,19 +269,21 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
 /// P_yy, which both forms provide.
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled,
           class Form = FullCovariance>
-class ModifiedJointUkf : public detail::EngineOf<ModifiedJointUkf<Model_, Integrator_, PointSet, Form>, Model_,
-                                                 Integrator_, ModifiedJointUkfSettingsFor<Model_>,
-                                                 detail::ModifiedJointParameters, Model_::StateDim, PointSet, Form> {
+class ModifiedJointUkf
+    : public detail::EngineOf<
+          ModifiedJointUkf<Model_, Integrator_, PointSet, Form>, Model_, Integrator_,
+          ModifiedJointUkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::ParamDim, Model_::MeasDim>,
+          detail::ModifiedJointParameters, Model_::StateDim, PointSet, Form> {
   static_assert(checkModel<Model_, 1>());
   using Engine = typename ModifiedJointUkf::UnscentedEngine;
   friend Engine;
-  friend typename Engine::PolicyType;
 
  public:
   /// The model's scalar and vector types (see the engine, detail/unscented_engine.hpp).
   using typename Engine::Meas, typename Engine::Param, typename Engine::Scalar, typename Engine::State;
   /// The settings struct of this filter.
-  using Settings = ModifiedJointUkfSettingsFor<Model_>;
+  using Settings =
+      ModifiedJointUkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::ParamDim, Model_::MeasDim>;
   /// n, p and m: the model's sizes.
   using Engine::StateDim, Engine::ParamDim, Engine::MeasDim;
   /// 2n + 1 sigma points, each with its own parameter vector θᵢ.
@@ -375,5 +375,10 @@ class ModifiedJointUkf : public detail::EngineOf<ModifiedJointUkf<Model_, Integr
 
   static const State& initialMean(const State& initialState, const Param&) { return initialState; }
 };
+
+/// The settings of `ModifiedJointUkf<Model>`.
+template <class Model>
+using ModifiedJointUkfSettingsFor =
+    ModifiedJointUkfSettings<typename Model::Scalar, Model::StateDim, Model::ParamDim, Model::MeasDim>;
 
 }  // namespace mjukf

@@ -51,8 +51,8 @@ namespace detail {
 
 // The bounds, and `initial` (named `initialName` in the message) within them.
 template <class Scalar, int ParamDim, class Initial>
-SettingsError validateBounds(const char* owner, const ParameterBounds<Scalar, ParamDim>& bounds,
-                             const Initial& initial, const char* initialName = "initialParameters") {
+SettingsError validateBounds(const char* owner, const ParameterBounds<Scalar, ParamDim>& bounds, const Initial& initial,
+                             const char* initialName = "initialParameters") {
   if (bounds.lower.hasNaN() || bounds.upper.hasNaN()) return invalid(owner, "parameterBounds", "must not be NaN");
   if (!(bounds.lower.array() <= bounds.upper.array()).all())
     return invalid(owner, "parameterBounds", "must have lower <= upper");

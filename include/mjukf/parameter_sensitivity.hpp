@@ -140,8 +140,7 @@ class ParameterSensitivity {
         const Scalar delta = step(theta, r, output);
         Param perturbed = theta;
         perturbed(r) += delta;
-        candidateMeasurement_.col(r) =
-            (measure(State(priorMean + delta * state_.col(r)), perturbed) - nominal) / delta;
+        candidateMeasurement_.col(r) = (measure(State(priorMean + delta * state_.col(r)), perturbed) - nominal) / delta;
       }
     }
     // A missing component has a zero column in U and a unit row and column in S: its ψ does not reach
@@ -150,8 +149,8 @@ class ParameterSensitivity {
       for (int j = 0; j < M; ++j)
         if (!(*present)(j)) candidateMeasurement_.row(j).setZero();
     whitened_ = candidateMeasurement_;
-    detail::solveLowerInPlace(innovationFactor, whitened_);  // S⁻¹ ψ
-    if (!stale_) candidateState_.noalias() -= whitenedCross * whitened_;  // W − K ψ = W − U S⁻¹ ψ
+    detail::solveLowerInPlace(innovationFactor, whitened_);                        // S⁻¹ ψ
+    if (!stale_) candidateState_.noalias() -= whitenedCross * whitened_;           // W − K ψ = W − U S⁻¹ ψ
     if (sinceCorrection_ != forgettingInterval_ || memory != forgettingMemory_) {  // exp once per schedule
       forgettingInterval_ = sinceCorrection_;
       forgettingMemory_ = memory;
@@ -179,8 +178,10 @@ class ParameterSensitivity {
     for (int r = 0; r < P; ++r) {
       for (int j = 0; j < M; ++j) t(r, j) = candidateMeasurement_(j, r) * noiseWeights_(j);
       const Scalar sum = t.row(r).cwiseAbs().sum();
-      if (sum > Scalar(0)) t.row(r) /= sum;
-      else t.row(r).setZero();
+      if (sum > Scalar(0))
+        t.row(r) /= sum;
+      else
+        t.row(r).setZero();
     }
   }
 
@@ -213,19 +214,19 @@ class ParameterSensitivity {
 
  private:
   Param scale_ = Param::Ones();
-  StateSensitivity state_ = StateSensitivity::Zero();         // W
-  MeasSensitivity measurement_ = MeasSensitivity::Zero();     // ψ
-  Information information_ = Information::Identity();        // I
-  Scalar openLoopTime_ = 0;     // open-loop propagation since W was last predicted
-  Scalar sinceCorrection_ = 0;  // model time since the last measurement update
+  StateSensitivity state_ = StateSensitivity::Zero();      // W
+  MeasSensitivity measurement_ = MeasSensitivity::Zero();  // ψ
+  Information information_ = Information::Identity();      // I
+  Scalar openLoopTime_ = 0;                                // open-loop propagation since W was last predicted
+  Scalar sinceCorrection_ = 0;                             // model time since the last measurement update
   // Candidates and workspace.
   StateSensitivity candidateState_ = StateSensitivity::Zero();
   MeasSensitivity candidateMeasurement_ = MeasSensitivity::Zero();
   Information candidateInformation_ = Information::Identity();
   Scalar candidateInterval_ = 0;
-  bool stale_ = false;           // the last time update did not refresh W: reuse ψ
+  bool stale_ = false;  // the last time update did not refresh W: reuse ψ
   bool candidateStale_ = false;
-  Meas noiseWeights_ = Meas::Ones();  // 1 / √Rⱼⱼ
+  Meas noiseWeights_ = Meas::Ones();                                         // 1 / √Rⱼⱼ
   Scalar forgettingInterval_ = -1, forgettingMemory_ = -1, forgetting_ = 1;  // λ of the last interval
   // Workspace, zeroed once so that copying an object (a filter is built from a copy of its policy)
   // copies no indeterminate values.

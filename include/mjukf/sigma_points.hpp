@@ -28,12 +28,12 @@ struct SigmaPointParameters {
   Scalar kappa = 0;  ///< Secondary scaling; L + λ = α²(L + κ) must be positive.
 };
 
-/// The 2L + 1 scaled sigma points of an L-dimensional Gaussian and their weights.
-///
-/// The weights are computed once at construction; `generate` draws the points of a mean and
-/// covariance without allocating (the Cholesky workspace is a member).
-template <class Scalar_, int L>
-class MerweScaledSigmaPoints {
+/// What every symmetric sigma-point set shares: `Count` points x̂ ± γ Sᵢ for the columns Sᵢ of the lower
+/// Cholesky factor of P (with x̂ itself first when `Center`), their mean and covariance weights, and
+/// drawing them without allocating (the Cholesky workspace is a member). A set derives from it and
+/// fills the weights and γ at construction: `MerweScaledSigmaPoints`, `CubatureSigmaPoints`.
+template <class Scalar_, int L, bool Center>
+class SymmetricSigmaPointSet {
   static_assert(L > 0, "the dimension of the sigma points must be positive");
 
  public:
@@ -41,10 +41,10 @@ class MerweScaledSigmaPoints {
   using Scalar = Scalar_;
   /// L, the dimension of the vector.
   static constexpr int Dim = L;
-  /// 2L + 1 points.
-  static constexpr int Count = 2 * L + 1;
-  /// The first point is the mean itself.
-  static constexpr bool HasCenter = true;
+  /// The number of points: 2L, and one more at the mean when `HasCenter`.
+  static constexpr int Count = 2 * L + (Center ? 1 : 0);
+  /// Whether the first point is the mean itself.
+  static constexpr bool HasCenter = Center;
   /// A vector of dimension L.
   using Vector = Eigen::Matrix<Scalar, L, 1>;
   /// An L × L matrix.
@@ -53,6 +53,55 @@ class MerweScaledSigmaPoints {
   using Points = Eigen::Matrix<Scalar, L, Count>;
   /// One weight per point.
   using Weights = Eigen::Matrix<Scalar, Count, 1>;
+
+  /// Writes the points of (mean, cov) into `points`: the mean (when `HasCenter`), then the mean plus
+  /// and minus γ times the columns of the lower Cholesky factor of `cov` (only its lower triangle is
+  /// read). Returns Status::NotPositiveDefinite, with `points` untouched, when `cov` has no factor or
+  /// is not finite.
+  Status generate(const Vector& mean, const Matrix& cov, Points& points) {
+    if (!detail::allFinite(cov) || !detail::choleskyLower(cov, factor_)) return Status::NotPositiveDefinite;
+    return generateFromFactor(mean, factor_, points);
+  }
+
+  /// The same points from a lower Cholesky factor S of the covariance (cov = S Sᵀ) computed earlier:
+  /// a filter keeps the factor of the covariance it committed and draws from it without factoring
+  /// again. Only the lower triangle of S is read.
+  Status generateFromFactor(const Vector& mean, const Matrix& lowerFactor, Points& points) const {
+    if (!detail::allFinite(mean)) return Status::NotPositiveDefinite;
+    detail::drawSymmetricPoints<HasCenter>(mean, lowerFactor, gamma_, points);
+    return Status::Ok;
+  }
+
+  /// The mean weights Wmᵢ (docs/algorithms.md §1).
+  const Weights& meanWeights() const { return meanWeights_; }
+  /// The covariance weights Wcᵢ (docs/algorithms.md §1).
+  const Weights& covarianceWeights() const { return covarianceWeights_; }
+  /// γ, the scale of the points' spread.
+  Scalar gamma() const { return gamma_; }
+
+ protected:
+  /// Weights and γ zero until the derived set sets them.
+  SymmetricSigmaPointSet() = default;
+
+  Weights meanWeights_ = Weights::Zero();        ///< Wmᵢ, set by the derived set
+  Weights covarianceWeights_ = Weights::Zero();  ///< Wcᵢ, set by the derived set
+  Scalar gamma_ = 0;                             ///< γ, set by the derived set
+
+ private:
+  Matrix factor_ = Matrix::Zero();  // workspace of generate()
+};
+
+/// The 2L + 1 scaled sigma points of an L-dimensional Gaussian and their weights.
+///
+/// The weights are computed once at construction; `generate` draws the points of a mean and
+/// covariance without allocating (the Cholesky workspace is a member).
+template <class Scalar_, int L>
+class MerweScaledSigmaPoints : public SymmetricSigmaPointSet<Scalar_, L, true> {
+  using Base = SymmetricSigmaPointSet<Scalar_, L, true>;
+  using Base::covarianceWeights_, Base::gamma_, Base::meanWeights_;
+
+ public:
+  using typename Base::Scalar;
 
   /// The default parameters (α = 1, β = 2, κ = 0), which are valid for every L.
   MerweScaledSigmaPoints() : MerweScaledSigmaPoints(detail::Validated{}, SigmaPointParameters<Scalar>{}) {}
@@ -93,42 +142,14 @@ class MerweScaledSigmaPoints {
     covarianceWeights_(0) = meanWeights_(0) + Scalar(1) - alpha2 + parameters.beta;
   }
 
-  /// Writes the points of (mean, cov) into `points`: column 0 is the mean, columns 1…L and L+1…2L
-  /// are the mean plus and minus γ times the columns of the lower Cholesky factor of `cov` (only its
-  /// lower triangle is read). Returns Status::NotPositiveDefinite, with `points` untouched, when `cov`
-  /// has no factor or is not finite.
-  Status generate(const Vector& mean, const Matrix& cov, Points& points) {
-    if (!detail::allFinite(cov) || !detail::choleskyLower(cov, factor_)) return Status::NotPositiveDefinite;
-    return generateFromFactor(mean, factor_, points);
-  }
-
-  /// The same points from a lower Cholesky factor S of the covariance (cov = S Sᵀ) computed earlier:
-  /// a filter keeps the factor of the covariance it committed and draws from it without factoring
-  /// again. Only the lower triangle of S is read.
-  Status generateFromFactor(const Vector& mean, const Matrix& lowerFactor, Points& points) const {
-    if (!detail::allFinite(mean)) return Status::NotPositiveDefinite;
-    detail::drawSymmetricPoints<HasCenter>(mean, lowerFactor, gamma_, points);
-    return Status::Ok;
-  }
-
-  /// The mean weights Wmᵢ (docs/algorithms.md §1).
-  const Weights& meanWeights() const { return meanWeights_; }
-  /// The covariance weights Wcᵢ (docs/algorithms.md §1).
-  const Weights& covarianceWeights() const { return covarianceWeights_; }
   /// α, β, κ.
   const SigmaPointParameters<Scalar>& parameters() const { return parameters_; }
   /// λ = α² (L + κ) − L.
   Scalar lambda() const { return lambda_; }
-  /// γ = √(L + λ), the scale of the points' spread.
-  Scalar gamma() const { return gamma_; }
 
  private:
   SigmaPointParameters<Scalar> parameters_;
   Scalar lambda_;
-  Scalar gamma_;
-  Weights meanWeights_;
-  Weights covarianceWeights_;
-  Matrix factor_ = Matrix::Zero();  // workspace of generate()
 };
 
 /// The 2L points of the spherical-radial cubature rule of degree 3 (the cubature Kalman filter,
@@ -140,59 +161,22 @@ class MerweScaledSigmaPoints {
 /// (α, β, κ) is not used with it. The MJUKF cannot take it: its eqs. 8–10 pair 2n + 1 points with
 /// their θᵢ.
 template <class Scalar_, int L>
-class CubatureSigmaPoints {
-  static_assert(L > 0, "the dimension of the sigma points must be positive");
+class CubatureSigmaPoints : public SymmetricSigmaPointSet<Scalar_, L, false> {
+  using Base = SymmetricSigmaPointSet<Scalar_, L, false>;
 
  public:
-  /// The floating-point type.
-  using Scalar = Scalar_;
-  /// L, the dimension of the vector.
-  static constexpr int Dim = L;
-  /// 2L points.
-  static constexpr int Count = 2 * L;
-  /// No point at the mean.
-  static constexpr bool HasCenter = false;
-  /// A vector of dimension L.
-  using Vector = Eigen::Matrix<Scalar, L, 1>;
-  /// An L × L matrix.
-  using Matrix = Eigen::Matrix<Scalar, L, L>;
-  /// The points, one per column.
-  using Points = Eigen::Matrix<Scalar, L, Count>;
-  /// One weight per point.
-  using Weights = Eigen::Matrix<Scalar, Count, 1>;
+  using typename Base::Scalar;
 
   /// The set (it has no parameters).
-  CubatureSigmaPoints() : weights_(Weights::Constant(Scalar(1) / Scalar(Count))), gamma_(std::sqrt(Scalar(L))) {}
+  CubatureSigmaPoints() {
+    this->meanWeights_.setConstant(Scalar(1) / Scalar(Base::Count));  // 1/(2L)
+    this->covarianceWeights_ = this->meanWeights_;
+    this->gamma_ = std::sqrt(Scalar(L));  // √L
+  }
   /// The filters build their sets from their `sigmaPoints` setting; the cubature set does not use it.
   CubatureSigmaPoints(detail::Validated, const SigmaPointParameters<Scalar>&) : CubatureSigmaPoints() {}
   /// Always valid: the set has no parameters, and `parameters` is not used.
   static SettingsError validate(const SigmaPointParameters<Scalar>& /*parameters*/) { return {}; }
-
-  /// Writes the points of (mean, cov) into `points`: mean ± √L times the columns of the lower Cholesky
-  /// factor of `cov` (only its lower triangle is read). Returns Status::NotPositiveDefinite, with
-  /// `points` untouched, when `cov` has no factor or is not finite.
-  Status generate(const Vector& mean, const Matrix& cov, Points& points) {
-    if (!detail::allFinite(cov) || !detail::choleskyLower(cov, factor_)) return Status::NotPositiveDefinite;
-    return generateFromFactor(mean, factor_, points);
-  }
-  /// The same points from a lower Cholesky factor S of the covariance (cov = S Sᵀ).
-  Status generateFromFactor(const Vector& mean, const Matrix& lowerFactor, Points& points) const {
-    if (!detail::allFinite(mean)) return Status::NotPositiveDefinite;
-    detail::drawSymmetricPoints<HasCenter>(mean, lowerFactor, gamma_, points);
-    return Status::Ok;
-  }
-
-  /// The mean weights, 1/(2L) each.
-  const Weights& meanWeights() const { return weights_; }
-  /// The covariance weights, 1/(2L) each.
-  const Weights& covarianceWeights() const { return weights_; }
-  /// γ = √L, the scale of the points' spread.
-  Scalar gamma() const { return gamma_; }
-
- private:
-  Weights weights_;
-  Scalar gamma_;
-  Matrix factor_ = Matrix::Zero();  // workspace of generate()
 };
 
 /// Selects van der Merwe's scaled set (the default) as a filter's sigma points: the last template

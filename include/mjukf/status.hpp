@@ -16,15 +16,15 @@ namespace mjukf {
 /// so code written as `status == Status::Ok` keeps its meaning: it treats a repaired step as one to
 /// look at, never a refused one as taken.
 enum class Status {
-  Ok,                       ///< The step was taken.
-  NonFiniteMeasurement,     ///< A (present) component of the measurement is NaN or ±Inf.
-  NonFiniteInput,           ///< The input held over the step contains NaN or ±Inf.
-  InvalidStepSize,          ///< The integration step is not finite and positive, or the step count is < 1.
+  Ok,                    ///< The step was taken.
+  NonFiniteMeasurement,  ///< A (present) component of the measurement is NaN or ±Inf.
+  NonFiniteInput,        ///< The input held over the step contains NaN or ±Inf.
+  InvalidStepSize,       ///< The integration step is not finite and positive, or the step count is < 1.
   /// The covariance to draw sigma points from, or the one the step would commit, has no Cholesky
   /// factor, and the bounded repair (when enabled) did not give it one.
   NotPositiveDefinite,
   InnovationNotPositiveDefinite,  ///< The innovation covariance P_yy has no Cholesky factor.
-  NonFiniteResult,          ///< The model or the update produced NaN or ±Inf.
+  NonFiniteResult,                ///< The model or the update produced NaN or ±Inf.
   /// The step was taken, with a covariance made positive definite by the documented repair (a small
   /// multiple of the identity added to it).
   Repaired,

@@ -21,22 +21,19 @@ struct UkfSettings : UnscentedSettings<Scalar, StateDim, MeasDim> {
   /// The type of P₀ and Q (n × n).
   using StateMatrix = Eigen::Matrix<Scalar, StateDim, StateDim>;
 };
-/// The settings of `Ukf<Model>`.
-template <class Model>
-using UkfSettingsFor = UkfSettings<typename Model::Scalar, Model::StateDim, Model::MeasDim>;
 
+/// \cond INTERNAL
 namespace detail {
 
 /// The parameter policy of `Ukf`: the parameters are known and fixed (detail/unscented_engine.hpp §3
 /// lists what a policy supplies).
 template <class Model, class Integrator, class Settings, class Est>
 class KnownParameters : public ParameterPolicy<Model, Integrator, Settings, Est> {
-  using Base = ParameterPolicy<Model, Integrator, Settings, Est>;
-
  public:
-  using typename Base::Param, typename Base::Points, typename Base::MeasPoints, typename Base::Vector;
+  KnownParameters(const Settings&, const typename Model::Param& parameters) : parameters_(parameters) {}
 
-  KnownParameters(const Settings&, const Param& parameters) : parameters_(parameters) {}
+  using Base = ParameterPolicy<Model, Integrator, Settings, Est>;
+  using typename Base::Param, typename Base::Points, typename Base::MeasPoints, typename Base::Vector;
   const Param& parameters() const { return parameters_; }
   void reset(const Param& parameters) { parameters_ = parameters; }
 
@@ -72,6 +69,7 @@ class KnownParameters : public ParameterPolicy<Model, Integrator, Settings, Est>
 };
 
 }  // namespace detail
+/// \endcond
 
 /// Unscented Kalman filter of the state of `Model`, whose parameters are known and fixed.
 ///
@@ -88,17 +86,17 @@ class KnownParameters : public ParameterPolicy<Model, Integrator, Settings, Est>
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled,
           class Form = FullCovariance>
 class Ukf : public detail::EngineOf<Ukf<Model_, Integrator_, PointSet, Form>, Model_, Integrator_,
-                                    UkfSettingsFor<Model_>, detail::KnownParameters, Model_::StateDim, PointSet, Form> {
+                                    UkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::MeasDim>,
+                                    detail::KnownParameters, Model_::StateDim, PointSet, Form> {
   static_assert(checkModel<Model_>());
   using Engine = typename Ukf::UnscentedEngine;
   friend Engine;
-  friend typename Engine::PolicyType;
 
  public:
   /// The model's scalar and vector types (see the engine, detail/unscented_engine.hpp).
   using typename Engine::Param, typename Engine::Scalar, typename Engine::State;
   /// The settings struct of this filter.
-  using Settings = UkfSettingsFor<Model_>;
+  using Settings = UkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::MeasDim>;
   /// An n × n matrix: the state covariance.
   using StateMatrix = Eigen::Matrix<Scalar, Engine::StateDim, Engine::StateDim>;
   /// The number of sigma points: 2n + 1 (van der Merwe's set, the default) or 2n (cubature).
@@ -144,5 +142,9 @@ class Ukf : public detail::EngineOf<Ukf<Model_, Integrator_, PointSet, Form>, Mo
 
   static const State& initialMean(const State& initialState, const Param&) { return initialState; }
 };
+
+/// The settings of `Ukf<Model>`.
+template <class Model>
+using UkfSettingsFor = UkfSettings<typename Model::Scalar, Model::StateDim, Model::MeasDim>;
 
 }  // namespace mjukf

@@ -17,7 +17,7 @@
 #include <gtest/gtest.h>
 
 #include "common/csv.hpp"
-#include "examples/run_program.hpp"
+#include "run_program.hpp"
 
 namespace {
 
@@ -78,8 +78,8 @@ INSTANTIATE_TEST_SUITE_P(
         ConformanceCase{"TankJukf", &kTank, "jukf", "coupled_tank_reference.csv", {0.2919404233}},
         ConformanceCase{"TankMjukf", &kTank, "mjukf", "coupled_tank_reference.csv", {0.2434184329}},
         ConformanceCase{"RobotJukf", &kRobot, "jukf", "flexible_joint_reference.csv", {0.02671036066, 0.03426798571}},
-        ConformanceCase{"RobotMjukf", &kRobot, "mjukf", "flexible_joint_reference.csv",
-                        {0.006717243853, 0.008727060131}}),
+        ConformanceCase{
+            "RobotMjukf", &kRobot, "mjukf", "flexible_joint_reference.csv", {0.006717243853, 0.008727060131}}),
     [](const auto& info) { return std::string(info.param.name); });
 
 // ---------------------------------------------------------------------------------------------
@@ -110,8 +110,8 @@ TEST_P(DualEstimate, RunsAndLearnsTheParameters) {
   const auto& c = GetParam();
   const std::string data = kData + "/" + c.file;
   const std::string out = scratch("estimates.csv");
-  const Result r = run(*c.program + " estimate --filter dual --ordering " + c.ordering + " --data " + data +
-                       " --out " + out);
+  const Result r =
+      run(*c.program + " estimate --filter dual --ordering " + c.ordering + " --data " + data + " --out " + out);
   ASSERT_EQ(r.exitCode, 0) << r.output;
   EXPECT_NE(r.output.find(std::string("dual (ordering: ") + c.ordering + ") on "), std::string::npos) << r.output;
   for (std::size_t i = 0; i < c.bound.size(); ++i) {
@@ -131,12 +131,11 @@ TEST_P(DualEstimate, RunsAndLearnsTheParameters) {
 
 INSTANTIATE_TEST_SUITE_P(
     ReferenceFiles, DualEstimate,
-    ::testing::Values(DualCase{"TankPrior", &kTank, "prior", "coupled_tank_reference.csv", {4.0}},
-                      DualCase{"TankUpdated", &kTank, "updated", "coupled_tank_reference.csv", {4.0}},
-                      DualCase{"RobotPrior", &kRobot, "prior", "flexible_joint_reference.csv",
-                               {0.02671036066, 0.03426798571}},
-                      DualCase{"RobotUpdated", &kRobot, "updated", "flexible_joint_reference.csv",
-                               {0.02671036066, 0.03426798571}}),
+    ::testing::Values(
+        DualCase{"TankPrior", &kTank, "prior", "coupled_tank_reference.csv", {4.0}},
+        DualCase{"TankUpdated", &kTank, "updated", "coupled_tank_reference.csv", {4.0}},
+        DualCase{"RobotPrior", &kRobot, "prior", "flexible_joint_reference.csv", {0.02671036066, 0.03426798571}},
+        DualCase{"RobotUpdated", &kRobot, "updated", "flexible_joint_reference.csv", {0.02671036066, 0.03426798571}}),
     [](const auto& info) { return std::string(info.param.name); });
 
 // The default ordering is `prior`; `updated` is another filter (different RMSEs on the robot).
@@ -183,9 +182,8 @@ TEST(Simulate, WritesOneRowPerStepWithTruthAndThirtyDecibelNoise) {
   const Result r = run(kRobot + " simulate --out " + out + " --duration 2 --seed 3");
   ASSERT_EQ(r.exitCode, 0) << r.output;
   const auto table = readCsv(out);
-  const std::vector<std::string> header{"t",       "y1",      "y2",      "y3",          "y4",
-                                        "x1_true", "x2_true", "x3_true", "x4_true",     "theta1_true",
-                                        "theta2_true"};
+  const std::vector<std::string> header{"t",       "y1",      "y2",      "y3",          "y4",         "x1_true",
+                                        "x2_true", "x3_true", "x4_true", "theta1_true", "theta2_true"};
   EXPECT_EQ(table.names(), header);
   ASSERT_EQ(table.rows(), 2001u);
   EXPECT_NEAR(table.column("t")[1234], 1.234, 1e-12);
@@ -294,8 +292,8 @@ TEST(Estimate, SettingsAreOverridable) {
   const Result same = run(kRobot + " estimate --filter mjukf --data " + data + " --out " + scratch("b.csv") +
                           " --xi -0.0025 --every 5 --transform 0.3,0.3,0.2,0.2,0.2,0.2,0.3,0.3 --p-theta 0.01,0.01" +
                           " --r 1e-3 --q 1e-5 --p0 0.5,0.5,0.5,0.5 --theta0 0.1,0.15 --alpha 1 --beta 2 --kappa 0");
-  const Result other = run(kRobot + " estimate --filter mjukf --data " + data + " --out " + scratch("c.csv") +
-                           " --xi -0.0015");
+  const Result other =
+      run(kRobot + " estimate --filter mjukf --data " + data + " --out " + scratch("c.csv") + " --xi -0.0015");
   ASSERT_EQ(paper.exitCode, 0) << paper.output;
   ASSERT_EQ(same.exitCode, 0) << same.output;
   ASSERT_EQ(other.exitCode, 0) << other.output;
@@ -363,22 +361,23 @@ TEST(Paper, RobotRunsBothScenariosOnTheGivenFiles) {
   };
   const std::string data = head("flexible_joint_reference.csv", "short.csv");
   const std::string change = head("flexible_joint_param_change_reference.csv", "short_change.csv");
-  const Result r =
-      run(kRobot + " paper --runs 2 --out-dir " + dir + " --data " + data + " --change-data " + change);
+  const Result r = run(kRobot + " paper --runs 2 --out-dir " + dir + " --data " + data + " --change-data " + change);
   ASSERT_EQ(r.exitCode, 0) << r.output;
-  for (const char* text : {"Table 4", "RMSE K_tau", "RMSE m", "4.337", "3.717", "parameter change", "xi = -0.0035",
-                           "no published value"})
+  for (const char* text :
+       {"Table 4", "RMSE K_tau", "RMSE m", "4.337", "3.717", "parameter change", "xi = -0.0035", "no published value"})
     EXPECT_NE(r.output.find(text), std::string::npos) << text << "\n" << r.output;
   EXPECT_TRUE(std::regex_search(r.output, std::regex("JUKF +MJUKF +dual +JUKF +MJUKF +dual"))) << r.output;
-  EXPECT_TRUE(std::regex_search(r.output, std::regex(R"(RMSE m \(kg\) +[0-9.]+ +[0-9.]+ +[0-9.]+ +0\.019 +0\.01233 +- )")))
+  EXPECT_TRUE(
+      std::regex_search(r.output, std::regex(R"(RMSE m \(kg\) +[0-9.]+ +[0-9.]+ +[0-9.]+ +0\.019 +0\.01233 +- )")))
       << r.output;
   // The parameter-change table has the dual column too: RMSE and final estimate of each parameter.
-  EXPECT_TRUE(std::regex_search(r.output, std::regex(R"(parameter change[\s\S]*\n +JUKF +MJUKF +dual *\n)"))) << r.output;
+  EXPECT_TRUE(std::regex_search(r.output, std::regex(R"(parameter change[\s\S]*\n +JUKF +MJUKF +dual *\n)")))
+      << r.output;
   EXPECT_TRUE(std::regex_search(r.output, std::regex(R"(final K_tau \(truth 0\.1\) +[-0-9.]+ +[-0-9.]+ +[-0-9.]+)")))
       << r.output;
-  for (const char* file : {"flexible_joint_change_jukf.csv", "flexible_joint_change_mjukf.csv",
-                           "flexible_joint_change_dual.csv", "flexible_joint_change_data.csv",
-                           "flexible_joint_mjukf.csv", "flexible_joint_dual.csv"})
+  for (const char* file :
+       {"flexible_joint_change_jukf.csv", "flexible_joint_change_mjukf.csv", "flexible_joint_change_dual.csv",
+        "flexible_joint_change_data.csv", "flexible_joint_mjukf.csv", "flexible_joint_dual.csv"})
     EXPECT_TRUE(fs::exists(fs::path(dir) / file)) << file;
   // The change data file has no truth columns: the paper's change at 5 s is used.
   const auto truth = readCsv((fs::path(dir) / "flexible_joint_change_data.csv").string());
@@ -416,7 +415,8 @@ TEST(CommandLine, DurationIsPositiveAndBounded) {
     const Result r = run(command);
     EXPECT_EQ(r.exitCode, 64) << command << "\n" << r.output;
     EXPECT_NE(r.output.find("--duration needs a time > 0 s of at most 10000000 steps"), std::string::npos)
-        << command << "\n" << r.output;
+        << command << "\n"
+        << r.output;
   }
 }
 
@@ -466,7 +466,8 @@ TEST(Paper, PlotsIntoADirectoryWithQuotesAndSpaces) {
                          " paper --duration 1 --runs 1 --out-dir " + shellQuote(dir.string()));
     ASSERT_EQ(r.exitCode, 0) << r.output;
     for (const char* file : {"coupled_tank_parameters.png", "coupled_tank_states.png"})
-      EXPECT_GT(fs::exists(dir / file) ? fs::file_size(dir / file) : 0u, 1000u) << name << ": " << file << "\n" << r.output;
+      EXPECT_GT(fs::exists(dir / file) ? fs::file_size(dir / file) : 0u, 1000u) << name << ": " << file << "\n"
+                                                                                << r.output;
     EXPECT_FALSE(fs::exists(base / "pwned")) << name << ": the shell ran a command from the path";
   }
 }
@@ -488,8 +489,9 @@ TEST_P(MalformedCsv, ExitsWithCodeTwoAndTheLineNumber) {
   const std::string path = writeFile("bad.csv", c.text);
   const std::string out = scratch("out.csv");
   fs::remove(out);
-  for (const std::string& command : std::vector<std::string>{kTank + " estimate --filter jukf --data " + path + " --out " + out,
-                                    kTank + " paper --runs 1 --out-dir " + scratch("paper") + " --data " + path}) {
+  for (const std::string& command :
+       std::vector<std::string>{kTank + " estimate --filter jukf --data " + path + " --out " + out,
+                                kTank + " paper --runs 1 --out-dir " + scratch("paper") + " --data " + path}) {
     const Result r = run(command);
     EXPECT_EQ(r.exitCode, 2) << command << "\n" << r.output;
     EXPECT_NE(r.output.find(path + ":" + c.lineTag + ":"), std::string::npos) << r.output;
@@ -572,7 +574,8 @@ TEST(CommandLine, UnknownFlagsAndBadValuesGetTheUsage) {
 TEST(CommandLine, EveryBeyondIntRangeIsRefused) {
   const std::string out = scratch("o.csv");
   fs::remove(out);
-  const std::string est = kRobot + " estimate --filter mjukf --data " + kData + "/flexible_joint_reference.csv --out " + out;
+  const std::string est =
+      kRobot + " estimate --filter mjukf --data " + kData + "/flexible_joint_reference.csv --out " + out;
   for (const char* every : {"4294967298", "2147483648", "99999999999999999999999"}) {
     const Result r = run(est + " --every " + every);
     EXPECT_EQ(r.exitCode, 64) << every << "\n" << r.output;

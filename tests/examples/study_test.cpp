@@ -12,7 +12,7 @@
 
 #include <gtest/gtest.h>
 
-#include "examples/run_program.hpp"
+#include "run_program.hpp"
 
 namespace {
 
@@ -45,7 +45,8 @@ std::pair<std::string, std::string> studyWithOneAndTwoJobs(const std::string& pr
   std::string csv[2];
   for (int jobs = 1; jobs <= 2; ++jobs) {
     const std::string dir = scratch("jobs" + std::to_string(jobs));
-    const Result r = run(program + " study " + flags + " --jobs " + std::to_string(jobs) + " --out-dir " + shellQuote(dir));
+    const Result r =
+        run(program + " study " + flags + " --jobs " + std::to_string(jobs) + " --out-dir " + shellQuote(dir));
     EXPECT_EQ(r.exitCode, 0) << r.output;
     csv[jobs - 1] = readText(dir + "/" + slug + "_study.csv");
   }
@@ -56,18 +57,19 @@ std::pair<std::string, std::string> studyWithOneAndTwoJobs(const std::string& pr
 // one and two jobs, one row per scenario × seed × filter in that order, and distinct seeds giving
 // distinct RMSEs (each run draws its own noise).
 TEST(Study, CsvIsTheSameForOneAndTwoJobs) {
-  const auto [one, two] =
-      studyWithOneAndTwoJobs(kRobot, "flexible_joint", "--seeds 3,1-2,9 --filters jukf,mjukf --scenarios static,change --duration 1");
+  const auto [one, two] = studyWithOneAndTwoJobs(
+      kRobot, "flexible_joint", "--seeds 3,1-2,9 --filters jukf,mjukf --scenarios static,change --duration 1");
   EXPECT_EQ(one, two);
   const auto rows = lines(one);
   ASSERT_EQ(rows.size(), 1u + 4 * 2 * 2);
   EXPECT_EQ(rows[0].rfind("seed,filter,scenario,rmse_K_tau,rmse_m,diverged,status,", 0), 0u) << rows[0];
-  const std::vector<std::string> order{"3,jukf,static,", "3,mjukf,static,", "1,jukf,static,", "1,mjukf,static,",
-                                       "2,jukf,static,", "2,mjukf,static,", "9,jukf,static,", "9,mjukf,static,",
-                                       "3,jukf,change,"};
+  const std::vector<std::string> order{"3,jukf,static,",  "3,mjukf,static,", "1,jukf,static,",
+                                       "1,mjukf,static,", "2,jukf,static,",  "2,mjukf,static,",
+                                       "9,jukf,static,",  "9,mjukf,static,", "3,jukf,change,"};
   for (std::size_t i = 0; i < order.size(); ++i) EXPECT_EQ(rows[i + 1].rfind(order[i], 0), 0u) << rows[i + 1];
   std::set<std::string> jukfRmses;  // fields 4 and 5 (rmse_K_tau, rmse_m) of the static JUKF rows
-  for (std::size_t i = 1; i <= 8; i += 2) jukfRmses.insert(std::regex_replace(rows[i], std::regex("^([^,]*,){3}([^,]*,[^,]*),.*$"), "$2"));
+  for (std::size_t i = 1; i <= 8; i += 2)
+    jukfRmses.insert(std::regex_replace(rows[i], std::regex("^([^,]*,){3}([^,]*,[^,]*),.*$"), "$2"));
   EXPECT_EQ(jukfRmses.size(), 4u) << one;
 }
 
@@ -84,7 +86,8 @@ TEST(Study, OffersMjukfAutomaticByDefault) {
   const std::string dir = scratch("out");
   const Result r = run(kVanDerPol + " study --seeds 1-2 --out-dir " + shellQuote(dir));
   ASSERT_EQ(r.exitCode, 0) << r.output;
-  EXPECT_TRUE(std::regex_search(r.output, std::regex("\nmjukf-auto +([-0-9.e]+ \\+- [-0-9.e]+ +[-0-9.e]+|- +-) +[0-2]/2\n")))
+  EXPECT_TRUE(
+      std::regex_search(r.output, std::regex("\nmjukf-auto +([-0-9.e]+ \\+- [-0-9.e]+ +[-0-9.e]+|- +-) +[0-2]/2\n")))
       << r.output;
   EXPECT_NE(run(kVanDerPol + " --help").output.find("mjukf-auto"), std::string::npos);
 }
@@ -94,8 +97,10 @@ TEST(Study, PrintsTheTableAndWritesItsFiles) {
   const std::string dir = scratch("out");
   const Result r = run(kTank + " study --seeds 1-3 --jobs 2 --duration 5 --out-dir " + shellQuote(dir));
   ASSERT_EQ(r.exitCode, 0) << r.output;
-  EXPECT_TRUE(std::regex_search(r.output, std::regex("\njukf +[-0-9.e]+ \\+- [-0-9.e]+ +[-0-9.e]+ +0/3\n"))) << r.output;
-  EXPECT_TRUE(std::regex_search(r.output, std::regex("\nmjukf +[-0-9.e]+ \\+- [-0-9.e]+ +[-0-9.e]+ +0/3\n"))) << r.output;
+  EXPECT_TRUE(std::regex_search(r.output, std::regex("\njukf +[-0-9.e]+ \\+- [-0-9.e]+ +[-0-9.e]+ +0/3\n")))
+      << r.output;
+  EXPECT_TRUE(std::regex_search(r.output, std::regex("\nmjukf +[-0-9.e]+ \\+- [-0-9.e]+ +[-0-9.e]+ +0/3\n")))
+      << r.output;
   EXPECT_TRUE(std::filesystem::exists(dir + "/coupled_tank_study.csv"));
   EXPECT_TRUE(std::filesystem::exists(dir + "/coupled_tank_study_table.txt"));
   if (run("gnuplot --version").exitCode == 0) {
@@ -109,14 +114,14 @@ TEST(Study, BadSeedsFiltersAndOutputDirectoryGetTheUsage) {
   std::ofstream(file) << "not a directory\n";
   const std::string out = " --out-dir " + shellQuote(scratch("unused"));
   const std::vector<std::pair<std::string, std::string>> cases{
-      {kTank + " study --seeds 5-3" + out, "--seeds"},                 // a range that runs backwards: no seed
-      {kTank + " study --seeds ''" + out, "--seeds"},                  // zero seeds
+      {kTank + " study --seeds 5-3" + out, "--seeds"},  // a range that runs backwards: no seed
+      {kTank + " study --seeds ''" + out, "--seeds"},   // zero seeds
       {kTank + " study --seeds 1-x" + out, "--seeds"},
       {kTank + " study --seeds 1,2,1" + out, "--seeds"},
       {kTank + " study --seeds 1, " + out, "--seeds"},
       {kTank + " study --seeds 1-99999999999" + out, "--seeds"},
       {kTank + " study --filters jukf,nope" + out, "--filters"},
-      {kTank + " study --scenarios change" + out, "--scenarios"},       // the tank has no parameter change
+      {kTank + " study --scenarios change" + out, "--scenarios"},  // the tank has no parameter change
       {kTank + " study --jobs 0" + out, "--jobs"},
       {kTank + " study --out-dir " + shellQuote(file + "/sub"), "--out-dir"},  // under a regular file
   };
@@ -137,7 +142,8 @@ TEST(Systems2019, SimulateThenEstimate) {
     ASSERT_EQ(simulated.exitCode, 0) << simulated.output;
     EXPECT_NE(simulated.output.find("noise std 0.1 |x_i|"), std::string::npos) << simulated.output;
     for (const char* filter : {"jukf", "mjukf"}) {
-      const Result r = run(program + " estimate --filter " + filter + " --data " + shellQuote(data) + " --out " + shellQuote(out));
+      const Result r =
+          run(program + " estimate --filter " + filter + " --data " + shellQuote(data) + " --out " + shellQuote(out));
       ASSERT_EQ(r.exitCode, 0) << program << " " << filter << "\n" << r.output;
       for (int i = 1; i <= parameters; ++i)
         EXPECT_TRUE(std::regex_search(r.output, std::regex("rmse_theta" + std::to_string(i) + ": [0-9]"))) << r.output;

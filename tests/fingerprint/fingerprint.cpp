@@ -141,8 +141,7 @@ void run(const char* fileName, const char* filterName, Variant variant, Filter f
         y(0) = std::numeric_limits<Scalar>::quiet_NaN();
         s = f.measurementUpdate(y);
       } else if (variant == Variant::Refusals && (k + 1) % (13 * every) == 0) {
-        y(0) = Scalar(1e300 > double(std::numeric_limits<Scalar>::max()) ? std::numeric_limits<Scalar>::max()
-                                                                          : 1e300);
+        y(0) = Scalar(1e300 > double(std::numeric_limits<Scalar>::max()) ? std::numeric_limits<Scalar>::max() : 1e300);
         s = f.measurementUpdate(y);
       } else {
         s = f.measurementUpdate(y);
@@ -184,7 +183,6 @@ Settings withVariant(Settings s, Variant v, bool bounds) {
   return s;
 }
 
-
 template <class Experiment>
 void runAll(const char* fileName, const std::string& dir, long maxRows) {
   using Model = typename Experiment::Model;
@@ -219,8 +217,7 @@ void runAll(const char* fileName, const std::string& dir, long maxRows) {
     }
     {
       auto s = withVariant<Experiment>(Experiment::dualUkf(), v, true);
-      run<mjukf::DualUkf<Model>, Experiment>(fileName, "dual-prior", v, mjukf::DualUkf<Model>(model, x0, th0, s),
-                                             data);
+      run<mjukf::DualUkf<Model>, Experiment>(fileName, "dual-prior", v, mjukf::DualUkf<Model>(model, x0, th0, s), data);
       s.ordering = mjukf::DualUkfOrdering::UpdatedParameters;
       run<mjukf::DualUkf<Model>, Experiment>(fileName, "dual-updated", v, mjukf::DualUkf<Model>(model, x0, th0, s),
                                              data);

@@ -7,10 +7,10 @@
 
 #include <cmath>
 #include <cstddef>
-#include <iterator>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <iterator>
 #include <limits>
 #include <stdexcept>
 #include <type_traits>
@@ -28,12 +28,23 @@ namespace {
 
 // A double: often one that is known to hurt (NaN, ±Inf, 0, huge, tiny), else ordinary or raw bits.
 double value(FuzzedDataProvider& in) {
-  static constexpr double special[] = {0.0, -0.0, 1.0, -1.0, 0.5, 1e-3, 1e-7, 1e-300, -1e-300, 1e300, -1e300,
+  static constexpr double special[] = {0.0,
+                                       -0.0,
+                                       1.0,
+                                       -1.0,
+                                       0.5,
+                                       1e-3,
+                                       1e-7,
+                                       1e-300,
+                                       -1e-300,
+                                       1e300,
+                                       -1e300,
                                        std::numeric_limits<double>::quiet_NaN(),
                                        std::numeric_limits<double>::infinity(),
                                        -std::numeric_limits<double>::infinity(),
                                        std::numeric_limits<double>::denorm_min(),
-                                       std::numeric_limits<double>::max(), std::numeric_limits<double>::epsilon()};
+                                       std::numeric_limits<double>::max(),
+                                       std::numeric_limits<double>::epsilon()};
   switch (in.ConsumeIntegralInRange(0, 3)) {
     case 0: return special[in.ConsumeIntegralInRange<std::size_t>(0, std::size(special) - 1)];
     case 1: return in.ConsumeFloatingPointInRange(-10.0, 10.0);
@@ -193,7 +204,7 @@ void run(FuzzedDataProvider& in) {
   if constexpr (std::is_same_v<Filter, mjukf::ModifiedJointUkf<Model, mjukf::ITrBdf2<double>>>) {
     s.scaling = value(in);
     s.transformation.setConstant(1.0 / Model::MeasDim);  // rows sum to 1 …
-    if (in.ConsumeBool()) fill(in, s.transformation);   // … or anything
+    if (in.ConsumeBool()) fill(in, s.transformation);    // … or anything
     fill(in, s.parameterSpread);
   }
   try {

@@ -77,11 +77,9 @@ inline Reference reference(Scenario s, double rtol, double atol) {
     CvodeSettings settings;
     settings.relativeTolerance = rtol;
     settings.absoluteTolerance = atol;
-    ref.stats = Cvode<double>(settings).integrateGrid(f, 0.0, x0, finestStep, steps,
-                                                      [&](long, double, const auto& x) {
-                                                        for (int i = 0; i < x.size(); ++i)
-                                                          ref.values.push_back(x(i));
-                                                      });
+    ref.stats = Cvode<double>(settings).integrateGrid(f, 0.0, x0, finestStep, steps, [&](long, double, const auto& x) {
+      for (int i = 0; i < x.size(); ++i) ref.values.push_back(x(i));
+    });
     return ref;
   });
 }
@@ -121,8 +119,8 @@ inline References references(Scenario s) {
 constexpr double resolution = 30;
 
 struct Run {
-  double maxError = 0;      // max over the horizon of ‖x_k − x_ref(t_k)‖∞
-  double evaluations = 0;   // mean evaluations of f per step
+  double maxError = 0;     // max over the horizon of ‖x_k − x_ref(t_k)‖∞
+  double evaluations = 0;  // mean evaluations of f per step
   bool finite = true;
 };
 
@@ -165,8 +163,8 @@ struct Row {
   double evaluations = 0;  // largest mean over the steps
   bool finite = true;
   std::vector<double> errors;
-  std::vector<double> orders;    // orders[i] from errors[i], errors[i + 1]
-  std::vector<bool> resolved;    // errors[i + 1] ≥ resolution × the reference's error
+  std::vector<double> orders;  // orders[i] from errors[i], errors[i + 1]
+  std::vector<bool> resolved;  // errors[i + 1] ≥ resolution × the reference's error
 };
 
 template <class Stepper>

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "integrators/cross_check.hpp"
+#include "cross_check.hpp"
 
 namespace {
 
@@ -30,8 +30,7 @@ std::string ms(double v) {
   return buffer;
 }
 
-void table(Scenario s, const std::vector<double>& steps, const Reference& ref, const char* refName,
-           double refError) {
+void table(Scenario s, const std::vector<double>& steps, const Reference& ref, const char* refName, double refError) {
   std::printf("\n#### %s, against CVODE %s (its own max error ≤ %s)\n\n", name(s), refName, sci(refError).c_str());
   std::printf("| stepper | order | f / step |");
   for (double h : steps) std::printf(" h = %s |", ms(h).c_str());
@@ -62,8 +61,9 @@ int main() {
   std::vector<References> refs;
   for (Scenario s : scenarios) refs.push_back(references(s));
 
-  std::printf("### References\n\n| scenario | CVODE internal steps (rtol 1e-10) | f evaluations | "
-              "max error of rtol 1e-10 | max error of rtol 1e-13 (bound) |\n|---|---|---|---|---|\n");
+  std::printf(
+      "### References\n\n| scenario | CVODE internal steps (rtol 1e-10) | f evaluations | "
+      "max error of rtol 1e-10 | max error of rtol 1e-13 (bound) |\n|---|---|---|---|---|\n");
   for (std::size_t i = 0; i < refs.size(); ++i)
     std::printf("| %s | %ld | %ld | %s | %s |\n", name(scenarios[i]), refs[i].standard.stats.steps,
                 refs[i].standard.stats.evaluations, sci(refs[i].standardError).c_str(),
@@ -76,19 +76,22 @@ int main() {
   std::printf("\n### Asymptotic orders against the tight reference (rtol 1e-13, atol 1e-15)\n");
   for (std::size_t i = 0; i < refs.size(); ++i) {
     const Scenario s = scenarios[i];
-    table(s, s == Scenario::TankFromRest ? stepsMs() : asymptoticStepsMs(s), refs[i].tight,
-          "rtol 1e-13, atol 1e-15", refs[i].tightError);
+    table(s, s == Scenario::TankFromRest ? stepsMs() : asymptoticStepsMs(s), refs[i].tight, "rtol 1e-13, atol 1e-15",
+          refs[i].tightError);
   }
 
-  std::printf("\n### I-TR-BDF2's leading error\n\n"
-              "C = max_t ‖E(t)‖∞ from E' = J E + ẍ/4, E(0) = 0; columns: measured max error / (C h), against the "
-              "tight reference.\n\n");
+  std::printf(
+      "\n### I-TR-BDF2's leading error\n\n"
+      "C = max_t ‖E(t)‖∞ from E' = J E + ẍ/4, E(0) = 0; columns: measured max error / (C h), against the "
+      "tight reference.\n\n");
   std::printf("| scenario | C | h = 4 ms | 2 ms | 1 ms | 0.5 ms |\n|---|---|---|---|---|---|\n");
   for (std::size_t i = 0; i < refs.size(); ++i) {
     const double c = iTrBdf2ErrorConstant(scenarios[i]);
     std::printf("| %s | %s |", name(scenarios[i]), sci(c).c_str());
     for (double h : stepsMs())
-      std::printf(" %s |", fixed(run(ITrBdf2<double>(), scenarios[i], h * 1e-3, refs[i].tight).maxError / (c * h * 1e-3), 4).c_str());
+      std::printf(
+          " %s |",
+          fixed(run(ITrBdf2<double>(), scenarios[i], h * 1e-3, refs[i].tight).maxError / (c * h * 1e-3), 4).c_str());
     std::printf("\n");
   }
 

@@ -68,10 +68,10 @@ void expectOrder(const Stepper& stepper, double declared) {
   for (int i = 0; i < 4; ++i) {
     const double h = 0.1 / double(1 << i);
     const int steps = 20 << i;
-    const double spiralError =
-        maxError(stepper, spiral<double>, x0, [&](double t) { return exactSpiral(t, x0); }, h, steps);
-    const double forcedError =
-        maxError(stepper, forced, Vec1(1.0), [](double t) { return Vec1(exactForced(t)); }, h, steps);
+    const double spiralError = maxError(
+        stepper, spiral<double>, x0, [&](double t) { return exactSpiral(t, x0); }, h, steps);
+    const double forcedError = maxError(
+        stepper, forced, Vec1(1.0), [](double t) { return Vec1(exactForced(t)); }, h, steps);
     if (i > 0) {
       EXPECT_NEAR(std::log2(previousSpiral / spiralError), declared, 0.15) << "spiral, h = " << h;
       EXPECT_NEAR(std::log2(previousForced / forcedError), declared, 0.15) << "forced, h = " << h;
@@ -153,8 +153,8 @@ TEST(Integrators, TrBdf2UsesAProvidedJacobian) {
   ASSERT_TRUE(provided.converged);
   ASSERT_TRUE(differenced.converged);
   EXPECT_EQ(provided.jacobians, 1);
-  EXPECT_EQ(provided.evaluations, 1 + provided.iterations);              // no difference quotients
-  EXPECT_EQ(differenced.evaluations, 1 + 2 + differenced.iterations);   // n = 2 of them
+  EXPECT_EQ(provided.evaluations, 1 + provided.iterations);            // no difference quotients
+  EXPECT_EQ(differenced.evaluations, 1 + 2 + differenced.iterations);  // n = 2 of them
   EXPECT_LT((a - b).cwiseAbs().maxCoeff(), 1e-13);
 }
 
@@ -197,9 +197,8 @@ template <class Model, class Stepper>
 void stepWithoutAllocating(const Stepper& stepper) {
   const Model model;
   const typename Model::Param theta = Model::trueParameters();
-  const auto f = [&](typename Model::Scalar t, const typename Model::State& x) -> typename Model::State {
-    return model.derivative(t, x, model.input(t), theta);
-  };
+  const auto f = [&](typename Model::Scalar t, const typename Model::State& x) ->
+      typename Model::State { return model.derivative(t, x, model.input(t), theta); };
   typename Model::State x = Model::State::Constant(typename Model::Scalar(0.5));
   Eigen::internal::set_is_malloc_allowed(false);
   for (int k = 0; k < 10; ++k) x = stepper.step(f, typename Model::Scalar(k) * 1e-3f, x, typename Model::Scalar(1e-3));

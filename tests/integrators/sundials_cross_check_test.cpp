@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "integrators/cross_check.hpp"
+#include "cross_check.hpp"
 #include "mjukf/joint_ukf.hpp"
 #include "mjukf/simulation.hpp"
 

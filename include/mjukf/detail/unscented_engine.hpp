@@ -43,6 +43,8 @@
 
 namespace mjukf::detail {
 
+/// \cond INTERNAL
+
 // ==== 1. Propagating a model over a step ==============================================================
 
 // The model's own input signal u(t), evaluated at every stage time: for the open-loop mean, one point.
@@ -774,6 +776,8 @@ struct ParameterPolicy {
   using CheckCorrection = Correction<Model, Settings, Est>;
 };
 
+/// \endcond
+
 // ==== 4. The engine ===================================================================================
 
 // The status of a step made of two parts that were both taken: Repaired if either was.
@@ -1041,6 +1045,7 @@ class UnscentedEngine {
   /// \endcond
 };
 
+/// \cond INTERNAL
 // The engine of filter `Filter` over `Model`, with the parameter policy template `PolicyOf` (given the
 // model, stepper, settings and estimate) and an estimate of dimension L drawn with `PointSet`, in the
 // covariance form `Form`.
@@ -1050,5 +1055,7 @@ using EngineOf = UnscentedEngine<
     Filter, Model, Integrator, Settings,
     PolicyOf<Model, Integrator, Settings, Estimate<typename Model::Scalar, L, Model::MeasDim, PointSet, Form>>, L,
     PointSet, Form>;
+
+/// \endcond
 
 }  // namespace mjukf::detail

@@ -86,8 +86,7 @@ SettingsError requirePositiveDefinite(const char* owner, const char* setting, co
 // (about Lε max|Qᵢⱼ|) is far below δ. The fixed-size Cholesky here instead of an eigen-solver keeps
 // the check cheap to compile for every filter size.
 template <class Derived>
-SettingsError requirePositiveSemiDefinite(const char* owner, const char* setting,
-                                          const Eigen::MatrixBase<Derived>& m) {
+SettingsError requirePositiveSemiDefinite(const char* owner, const char* setting, const Eigen::MatrixBase<Derived>& m) {
   using Scalar = typename Derived::Scalar;
   if (SettingsError e = requireSymmetric(owner, setting, m)) return e;
   const Scalar largest = m.cwiseAbs().maxCoeff();

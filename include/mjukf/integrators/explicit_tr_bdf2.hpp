@@ -45,7 +45,8 @@ class ExplicitTrBdf2 {
 #endif
   /// The stepper, or the SettingsError naming `gamma` when it is not in (0, 1).
   static Result<ExplicitTrBdf2> create(Scalar gamma) {
-    return detail::resultOf<ExplicitTrBdf2>(validate(gamma), [&] { return ExplicitTrBdf2(detail::Validated{}, gamma); });
+    return detail::resultOf<ExplicitTrBdf2>(validate(gamma),
+                                            [&] { return ExplicitTrBdf2(detail::Validated{}, gamma); });
   }
   /// The SettingsError naming `gamma` when it is not in (0, 1), or none: what the constructor would throw.
   static SettingsError validate(Scalar gamma) { return detail::validateStageFraction("mjukf::ExplicitTrBdf2", gamma); }

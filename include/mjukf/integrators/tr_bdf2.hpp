@@ -23,9 +23,9 @@ namespace detail {
 template <class F, class Scalar, class State, class = void>
 struct HasJacobian : std::false_type {};
 template <class F, class Scalar, class State>
-struct HasJacobian<F, Scalar, State,
-                   std::void_t<decltype(std::declval<const F&>().jacobian(std::declval<Scalar>(),
-                                                                          std::declval<const State&>()))>>
+struct HasJacobian<
+    F, Scalar, State,
+    std::void_t<decltype(std::declval<const F&>().jacobian(std::declval<Scalar>(), std::declval<const State&>()))>>
     : std::true_type {};
 
 }  // namespace detail
@@ -111,7 +111,8 @@ class TrBdf2 {
 #if MJUKF_EXCEPTIONS
   /// Throws std::invalid_argument naming the setting when one is invalid (`validate`). Without
   /// exceptions, use `create`.
-  explicit TrBdf2(const TrBdf2Settings<Scalar>& settings) : TrBdf2(detail::throwIfInvalid(validate(settings)), settings) {}
+  explicit TrBdf2(const TrBdf2Settings<Scalar>& settings)
+      : TrBdf2(detail::throwIfInvalid(validate(settings)), settings) {}
 #endif
   /// The stepper, or the SettingsError naming the first invalid setting.
   static Result<TrBdf2> create(const TrBdf2Settings<Scalar>& settings) {
@@ -212,8 +213,8 @@ class TrBdf2 {
   // Simplified Newton on z − d h f(τ, z) = rhs. Returns false only after a second round with a fresh
   // Jacobian also failed.
   template <class F, class State, class Matrix>
-  bool solveStage(F& f, Scalar tau, const State& rhs, Scalar dh, State& z, Matrix& jac,
-                  Eigen::PartialPivLU<Matrix>& lu, bool& factored, TrBdf2Report& report) const {
+  bool solveStage(F& f, Scalar tau, const State& rhs, Scalar dh, State& z, Matrix& jac, Eigen::PartialPivLU<Matrix>& lu,
+                  bool& factored, TrBdf2Report& report) const {
     for (int round = 0; round < 2; ++round) {
       if (round == 1) {  // refresh the Jacobian at the current iterate (or the start, if z went bad)
         if (!z.allFinite()) return false;

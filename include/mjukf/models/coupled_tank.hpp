@@ -38,11 +38,11 @@ struct CoupledTank {
   /// u = (pump voltage) in V.
   using Input = Eigen::Matrix<Scalar, InputDim, 1>;
 
-  Scalar area1 = Scalar(15.5179);   ///< A₁, cross-section of the upper tank (cm²)
-  Scalar area2 = Scalar(15.5179);   ///< A₂, cross-section of the lower tank (cm²)
-  Scalar orifice1 = Scalar(5);      ///< c₁, outflow coefficient of the upper tank
-  Scalar orifice2 = Scalar(5);      ///< c₂, outflow coefficient of the lower tank
-  Scalar pumpVoltage = Scalar(5);   ///< u = q_i, constant pump voltage (V)
+  Scalar area1 = Scalar(15.5179);  ///< A₁, cross-section of the upper tank (cm²)
+  Scalar area2 = Scalar(15.5179);  ///< A₂, cross-section of the lower tank (cm²)
+  Scalar orifice1 = Scalar(5);     ///< c₁, outflow coefficient of the upper tank
+  Scalar orifice2 = Scalar(5);     ///< c₂, outflow coefficient of the lower tank
+  Scalar pumpVoltage = Scalar(5);  ///< u = q_i, constant pump voltage (V)
 
   /// The true flow constant of the paper's experiment, θ = (k_flow) = (6).
   static Param trueParameters() { return Param::Constant(Scalar(6)); }

@@ -73,9 +73,7 @@ struct FlexibleJoint {
     const Scalar torqueConstant = theta(0);  // K_τ
     const Scalar mass = theta(1);            // m
     const Scalar twist = x(2) - x(0);        // θ_l − θ_m
-    return State(x(1),
-                 (springStiffness * twist - viscousFriction * x(1) + torqueConstant * u(0)) / motorInertia,
-                 x(3),
+    return State(x(1), (springStiffness * twist - viscousFriction * x(1) + torqueConstant * u(0)) / motorInertia, x(3),
                  (-springStiffness * twist - mass * gravity * leverArm * std::sin(x(2))) / linkInertia);
   }
 

@@ -15,8 +15,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <exception>
-#include <memory>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -86,8 +86,8 @@ inline void check(int flag, const char* call, const std::string& message = std::
   if (flag < 0) {
     // CVodeGetReturnFlagName returns a malloc'ed string the caller frees.
     const std::unique_ptr<char, decltype(&std::free)> name(CVodeGetReturnFlagName(flag), &std::free);
-    std::string what = std::string("mjukf::Cvode: ") + call + " failed with " +
-                       (name ? name.get() : "?") + " (" + std::to_string(flag) + ")";
+    std::string what = std::string("mjukf::Cvode: ") + call + " failed with " + (name ? name.get() : "?") + " (" +
+                       std::to_string(flag) + ")";
     if (!message.empty()) what += ": " + message;
     throw CvodeError(what, flag);
   }
@@ -95,8 +95,7 @@ inline void check(int flag, const char* call, const std::string& message = std::
 
 template <class T>
 T* require(T* object, const char* call) {
-  if (object == nullptr)
-    throw CvodeError(std::string("mjukf::Cvode: ") + call + " returned null", CV_MEM_NULL);
+  if (object == nullptr) throw CvodeError(std::string("mjukf::Cvode: ") + call + " returned null", CV_MEM_NULL);
   return object;
 }
 
@@ -192,9 +191,8 @@ class Session {
 /// filters integrate it (detail/unscented_engine.hpp). The model is held by reference.
 template <class Model>
 auto modelRhs(const Model& model, const typename Model::Param& theta) {
-  return [&model, theta](typename Model::Scalar t, const typename Model::State& x) -> typename Model::State {
-    return model.derivative(t, x, model.input(t), theta);
-  };
+  return [&model, theta](typename Model::Scalar t, const typename Model::State& x) ->
+         typename Model::State { return model.derivative(t, x, model.input(t), theta); };
 }
 
 /// CVODE (BDF, Newton with a dense difference-quotient Jacobian) with the stepper interface:

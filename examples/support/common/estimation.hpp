@@ -14,9 +14,9 @@
 #include "mjukf/dual_ukf.hpp"
 #include "mjukf/joint_ukf.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
-#include "mjukf/paper/rmse.hpp"
-#include "mjukf/paper/schedule.hpp"
 #include "mjukf/ukf.hpp"
+#include "paper/rmse.hpp"
+#include "paper/schedule.hpp"
 
 namespace mjukf::examples {
 
@@ -109,7 +109,8 @@ EstimateRun<typename Experiment::Model> runFilter(const typename Experiment::Mod
       return detail::runSchedule(filter, data, setup.measurementEvery);
     }
     case FilterKind::ModifiedJointUkf: {
-      ModifiedJointUkf<Model, Integrator> filter(model, setup.initialState, setup.initialParameters, setup.modifiedJointUkf);
+      ModifiedJointUkf<Model, Integrator> filter(model, setup.initialState, setup.initialParameters,
+                                                 setup.modifiedJointUkf);
       return detail::runSchedule(filter, data, setup.measurementEvery);
     }
     case FilterKind::DualUkf: {

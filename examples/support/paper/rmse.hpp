@@ -23,9 +23,7 @@ class RmseAccumulator {
     ++count_;
   }
   /// The RMSE of each component over the rows added so far (NaN before the first row).
-  Vector value() const {
-    return (sumOfSquares_ / double(count_)).array().sqrt().matrix().template cast<Scalar>();
-  }
+  Vector value() const { return (sumOfSquares_ / double(count_)).array().sqrt().matrix().template cast<Scalar>(); }
   /// The number of rows added.
   long count() const { return count_; }
 

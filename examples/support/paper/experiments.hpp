@@ -119,8 +119,7 @@ struct FlexibleJointExperiment {
   /// JUKF's settings (docs/plants.md §5).
   static JointUkfSettingsFor<Model> jointUkf() {
     JointUkfSettingsFor<Model> s;
-    s.initialCovariance.diagonal() << Scalar(0.5), Scalar(0.5), Scalar(0.5), Scalar(0.5), Scalar(1e-3),
-        Scalar(1e-3);
+    s.initialCovariance.diagonal() << Scalar(0.5), Scalar(0.5), Scalar(0.5), Scalar(0.5), Scalar(1e-3), Scalar(1e-3);
     s.processNoise.diagonal().setConstant(Scalar(1e-5));
     s.measurementNoise.diagonal().setConstant(Scalar(1e-3));
     return s;

@@ -47,7 +47,8 @@ namespace detail {
 
 // Column `name` of `table`, refused at the first NaN or infinity: a filter would skip one on a row
 // without a measurement and stop half way on one with, and a truth of NaN makes a NaN RMSE.
-inline const std::vector<double>& finiteColumn(const CsvTable& table, const std::string& path, const std::string& name) {
+inline const std::vector<double>& finiteColumn(const CsvTable& table, const std::string& path,
+                                               const std::string& name) {
   const auto& column = table.column(name);
   for (std::size_t k = 0; k < column.size(); ++k)
     if (!std::isfinite(column[k]))
@@ -87,8 +88,9 @@ PlantData<Model> loadPlantData(const std::string& path, double h, const typename
   const auto requireAllOrNone = [&](const std::string& prefix, int n, const std::string& suffix) {
     const int found = detail::countColumns(table, prefix, n, suffix);
     if (found != 0 && found != n)
-      throw CsvError(path, 1, "has only " + std::to_string(found) + " of the " + std::to_string(n) + " columns " +
-                                  prefix + "1…" + prefix + std::to_string(n) + suffix);
+      throw CsvError(path, 1,
+                     "has only " + std::to_string(found) + " of the " + std::to_string(n) + " columns " + prefix +
+                         "1…" + prefix + std::to_string(n) + suffix);
     return found == n;
   };
   if (!table.has("t")) throw CsvError(path, 1, "no column named 't'");
@@ -102,9 +104,9 @@ PlantData<Model> loadPlantData(const std::string& path, double h, const typename
     const double expected = static_cast<double>(k) * h;
     if (!(std::abs(t[k] - expected) <= 0.25 * h))
       throw CsvError(path, static_cast<long>(k) + 2,
-                     "t = " + std::to_string(t[k]) + ", but row " + std::to_string(k) + " must be at t = " +
-                         std::to_string(expected) + " (one row per step of h = " + std::to_string(h) +
-                         " s from t = 0; see --step)");
+                     "t = " + std::to_string(t[k]) + ", but row " + std::to_string(k) +
+                         " must be at t = " + std::to_string(expected) +
+                         " (one row per step of h = " + std::to_string(h) + " s from t = 0; see --step)");
   }
 
   PlantData<Model> data;
@@ -124,10 +126,10 @@ PlantData<Model> loadPlantData(const std::string& path, double h, const typename
 template <class Model>
 void writePlantData(const std::string& path, const PlantData<Model>& data) {
   std::vector<std::string> header{"t"};
-  for (const auto& names : {numberedNames("y", Model::MeasDim),
-                            data.stateTruth.empty() ? std::vector<std::string>{}
-                                                    : numberedNames("x", Model::StateDim, "_true"),
-                            numberedNames("theta", Model::ParamDim, "_true")})
+  for (const auto& names :
+       {numberedNames("y", Model::MeasDim),
+        data.stateTruth.empty() ? std::vector<std::string>{} : numberedNames("x", Model::StateDim, "_true"),
+        numberedNames("theta", Model::ParamDim, "_true")})
     header.insert(header.end(), names.begin(), names.end());
   CsvWriter out(path, header);
   for (long k = 0; k < data.rows(); ++k) {

@@ -49,8 +49,7 @@ int simulateCommand(const std::vector<std::string>& words) {
   else
     std::snprintf(noise, sizeof noise, "SNR %g dB", options.snrDb);
   std::printf("simulated %s: %ld rows (%.6g s at h = %g s), %s, seed %llu -> %s\n", Plant::title, data.rows(),
-              options.duration, options.stepSize, noise, static_cast<unsigned long long>(options.seed),
-              out.c_str());
+              options.duration, options.stepSize, noise, static_cast<unsigned long long>(options.seed), out.c_str());
   return kExitOk;
 }
 
@@ -158,9 +157,9 @@ template <class Plant>
 int estimateCommand(const std::vector<std::string>& words) {
   using Experiment = typename Plant::Experiment;
   using Model = typename Experiment::Model;
-  const Arguments args(words, {"--filter", "--data", "--out", "--xi", "--every", "--step", "--rmse-from", "--x0",
-                               "--theta0", "--alpha", "--beta", "--kappa", "--p0", "--q", "--r", "--p-theta",
-                               "--transform", "--ordering", "--r-theta"});
+  const Arguments args(
+      words, {"--filter", "--data", "--out", "--xi", "--every", "--step", "--rmse-from", "--x0", "--theta0", "--alpha",
+              "--beta", "--kappa", "--p0", "--q", "--r", "--p-theta", "--transform", "--ordering", "--r-theta"});
   const auto setup = detail::filterSetup<Experiment>(args);
   const std::string dataPath = args.requiredText("--data");
   const std::string out = args.requiredText("--out");
@@ -179,7 +178,9 @@ int estimateCommand(const std::vector<std::string>& words) {
 
   const bool updated = setup.dualUkf.ordering == DualUkfOrdering::UpdatedParameters;
   std::printf("%s%s on %s: %ld rows, h = %g s, a measurement every %d steps\n", filterName(setup.kind),
-              setup.kind != FilterKind::DualUkf ? "" : updated ? " (ordering: updated)" : " (ordering: prior)",
+              setup.kind != FilterKind::DualUkf ? ""
+              : updated                         ? " (ordering: updated)"
+                                                : " (ordering: prior)",
               dataPath.c_str(), data.rows(), h, setup.measurementEvery);
   if (run.outcome.status != Status::Ok) {
     std::printf("error: the filter refused the step to row %ld (t = %g s): %s; %s holds rows 0-%ld only\n",
@@ -197,7 +198,8 @@ int estimateCommand(const std::vector<std::string>& words) {
   for (int i = 0; i < Model::ParamDim; ++i)
     std::printf("rmse_theta%d: %.10g  # %s (%s), final estimate %.6g, truth %.6g%s\n", i + 1, rmse(i),
                 Plant::parameters[std::size_t(i)].name, Plant::parameters[std::size_t(i)].unit, last(i),
-                data.parameterTruth.back()(i), setup.kind == FilterKind::Ukf ? " (fixed: ukf estimates no parameters)" : "");
+                data.parameterTruth.back()(i),
+                setup.kind == FilterKind::Ukf ? " (fixed: ukf estimates no parameters)" : "");
   std::printf("loop_seconds: %.6g\n", run.loopSeconds);
   std::printf("wrote %s\n", out.c_str());
   return kExitOk;

@@ -141,8 +141,8 @@ class Plotter {
     std::string s;
     s += "set datafile separator ','\n";
     s += "set grid\nset key outside right top vertical Left reverse\n";
-    s += "set multiplot layout " + std::to_string(figure.rows) + "," + std::to_string(figure.columns) +
-         " title \"" + figure.title + "\" font ',12'\n";
+    s += "set multiplot layout " + std::to_string(figure.rows) + "," + std::to_string(figure.columns) + " title \"" +
+         figure.title + "\" font ',12'\n";
     for (const Panel& panel : figure.panels) {
       s += "set title \"" + panel.title + "\"\n";
       s += "set xlabel \"" + panel.xLabel + "\"\n";
@@ -151,8 +151,8 @@ class Plotter {
       for (std::size_t i = 0; i < panel.series.size(); ++i) {
         const Series& c = panel.series[i];
         if (i > 0) s += ", \\\n     ";
-        s += detail::gnuplotQuote(c.file) + " skip 1 every " + std::to_string(c.every) + " using " + std::to_string(c.x) + ":" +
-             std::to_string(c.y) + " with " + c.style + " title \"" + c.title + "\"";
+        s += detail::gnuplotQuote(c.file) + " skip 1 every " + std::to_string(c.every) + " using " +
+             std::to_string(c.x) + ":" + std::to_string(c.y) + " with " + c.style + " title \"" + c.title + "\"";
       }
       s += "\n";
     }

@@ -134,9 +134,7 @@ struct VanDerPolExperiment : Experiment2019<VanDerPolExperiment<Scalar>, models:
   /// P₀ = 5 I, Q = 1e-3 I, R = 0.1 I (2019). JUKF's μ block (this library's choice): P₀ = 5 as the
   /// states' (a prior standard deviation of 2.2 for a guess 4.8 off), Q = 1e-5 as the paper's plants'
   /// JUKF (a constant parameter needs only a slow random walk; docs/studies.md).
-  static Settings2019<Model> common() {
-    return {Scalar(5), Scalar(1e-3), Scalar(0.1), Scalar(5), Scalar(1e-5)};
-  }
+  static Settings2019<Model> common() { return {Scalar(5), Scalar(1e-3), Scalar(0.1), Scalar(5), Scalar(1e-5)}; }
 
   /// ξ = 0.25, T = [0.5 0.5], p_θ = 0.5 (2019).
   static ModifiedJointUkfSettingsFor<Model> modifiedJointUkf() {
@@ -171,16 +169,14 @@ struct LorenzExperiment : Experiment2019<LorenzExperiment<Scalar>, models::Loren
   /// P₀ = Q = 1e-3 I, R = 0.2 I (2019). JUKF's θ block (this library's choice): P₀ = 10 I (a prior
   /// standard deviation of 3.2, the size of the guesses' errors 5, 7 and 2.3 within a factor 2),
   /// Q = 1e-5 I as the paper's plants' JUKF (docs/studies.md).
-  static Settings2019<Model> common() {
-    return {Scalar(1e-3), Scalar(1e-3), Scalar(0.2), Scalar(10), Scalar(1e-5)};
-  }
+  static Settings2019<Model> common() { return {Scalar(1e-3), Scalar(1e-3), Scalar(0.2), Scalar(10), Scalar(1e-5)}; }
 
   /// ξ = 0.006, T = [[0.8 0.1 0.1], [0.1 0.8 0.1], [0.1 0.1 0.8]], p_θ = 0.5 (2019).
   static ModifiedJointUkfSettingsFor<Model> modifiedJointUkf() {
     auto s = common().modifiedJointUkf();
     s.scaling = Scalar(0.006);
     s.transformation << Scalar(0.8), Scalar(0.1), Scalar(0.1),  //
-        Scalar(0.1), Scalar(0.8), Scalar(0.1),                   //
+        Scalar(0.1), Scalar(0.8), Scalar(0.1),                  //
         Scalar(0.1), Scalar(0.1), Scalar(0.8);
     s.parameterSpread.setConstant(Scalar(0.5));
     return s;

@@ -59,7 +59,8 @@ inline std::vector<std::uint64_t> parseSeeds(const std::string& text) {
   const auto number = [&](std::string_view word) {
     std::uint64_t value = 0;
     const auto [end, error] = std::from_chars(word.data(), word.data() + word.size(), value);
-    if (word.empty() || error != std::errc() || end != word.data() + word.size()) throw bad("'" + std::string(word) + "' is not a seed");
+    if (word.empty() || error != std::errc() || end != word.data() + word.size())
+      throw bad("'" + std::string(word) + "' is not a seed");
     return value;
   };
   std::vector<std::uint64_t> seeds;
@@ -250,21 +251,26 @@ bool drawStudyPlot(Plotter& plotter, const std::string& png, const std::string& 
   constexpr int p = static_cast<int>(Plant::parameters.size());
   std::string tics;
   for (std::size_t f = 0; f < filters.size(); ++f)
-    tics += format("%s\"%s%s\" %zu", f > 0 ? ", " : "", filters[f].name.c_str(), shown[f] ? "" : " (all diverged)", f + 1);
+    tics +=
+        format("%s\"%s%s\" %zu", f > 0 ? ", " : "", filters[f].name.c_str(), shown[f] ? "" : " (all diverged)", f + 1);
   std::string s = "set datafile separator ','\nset grid ytics\nset style fill solid 0.25 border -1\n";
   s += "set style boxplot outliers pointtype 7\nset style data boxplot\nset boxwidth 0.5\nunset key\n";
   s += format("set xtics (%s)\nset xrange [0.4:%zu.6]\n", tics.c_str(), filters.size());
-  s += format("set multiplot layout 1,%d title \"%s, %s: parameter RMSE per run over seeds (diverged runs left out)\" font ',12'\n",
-              p, Plant::title, scenario.c_str());
+  s += format(
+      "set multiplot layout 1,%d title \"%s, %s: parameter RMSE per run over seeds (diverged runs left out)\" font "
+      "',12'\n",
+      p, Plant::title, scenario.c_str());
   for (int i = 0; i < p; ++i) {
     const Quantity& q = Plant::parameters[std::size_t(i)];
     s += format("set title \"%s\"\nset ylabel \"RMSE %s (%s)\"\n", q.label, q.label, q.unit);
     std::string plot;
     for (std::size_t f = 0; f < filters.size(); ++f)
       if (shown[f])
-        plot += format("%s%s skip 1 using (%zu):((strcol(2) eq \"%s\" && strcol(3) eq \"%s\" && column(%d) == 0) ? column(%d) : NaN) lc %zu",
-                       plot.empty() ? "plot " : ", \\\n     ", gnuplotQuote(csv).c_str(), f + 1, filters[f].name.c_str(),
-                       scenario.c_str(), divergedColumn, 4 + i, f + 1);
+        plot += format(
+            "%s%s skip 1 using (%zu):((strcol(2) eq \"%s\" && strcol(3) eq \"%s\" && column(%d) == 0) ? column(%d) : "
+            "NaN) lc %zu",
+            plot.empty() ? "plot " : ", \\\n     ", gnuplotQuote(csv).c_str(), f + 1, filters[f].name.c_str(),
+            scenario.c_str(), divergedColumn, 4 + i, f + 1);
     s += (plot.empty() ? "set yrange [0:1]\nplot 2 notitle" : plot) + "\n";
   }
   s += "unset multiplot\n";
@@ -284,11 +290,10 @@ int studyCommand(const std::vector<std::string>& words) {
   const Arguments args(words, {"--seeds", "--filters", "--scenarios", "--jobs", "--out-dir", "--duration"});
   const auto seeds = detail::parseSeeds(args.text("--seeds", "1-20"));
   const auto allFilters = detail::studyFilters<Model>();
-  const auto filters =
-      detail::parseChoices("--filters", args.text("--filters", allFilters.size() > 3 ? "jukf,mjukf,mjukf-auto" : "jukf,mjukf"),
-                           allFilters);
-  const auto scenarios = detail::parseChoices("--scenarios", args.text("--scenarios", "static"),
-                                              detail::studyScenarios<Plant>());
+  const auto filters = detail::parseChoices(
+      "--filters", args.text("--filters", allFilters.size() > 3 ? "jukf,mjukf,mjukf-auto" : "jukf,mjukf"), allFilters);
+  const auto scenarios =
+      detail::parseChoices("--scenarios", args.text("--scenarios", "static"), detail::studyScenarios<Plant>());
   const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
   const auto jobs = static_cast<unsigned>(args.integer("--jobs", cores, 1, 1024));
   if (args.has("--duration"))  // one length for every scenario: for short trials and tests
@@ -300,10 +305,13 @@ int studyCommand(const std::vector<std::string>& words) {
   // The output directory is checked before any run, so that a long study cannot fail at its end.
   std::error_code error;
   fs::create_directories(outDir, error);
-  const auto path = [&](const std::string& name) { return (fs::path(outDir) / (std::string(Plant::slug) + "_" + name)).string(); };
+  const auto path = [&](const std::string& name) {
+    return (fs::path(outDir) / (std::string(Plant::slug) + "_" + name)).string();
+  };
   const std::string csvPath = path("study.csv");
   if (error || !std::ofstream(csvPath))
-    throw UsageError("--out-dir " + outDir + ": cannot " + (error ? "create the directory: " + error.message() : "write " + csvPath));
+    throw UsageError("--out-dir " + outDir + ": cannot " +
+                     (error ? "create the directory: " + error.message() : "write " + csvPath));
 
   // Run r is scenario r / seeds, seed r % seeds; results[r][f] is filter f's result on it.
   const std::size_t runs = seeds.size() * scenarios.size();
@@ -374,8 +382,9 @@ int studyCommand(const std::vector<std::string>& words) {
   const auto say = [&](const std::string& line) { report.say(line); };
   say(format("%s: study over %zu seeds (%s), RMSE over rows >= %ld; statistics over the runs that did not diverge",
              Plant::title, seeds.size(), args.text("--seeds", "1-20").c_str(), Experiment::rmseFromRow));
-  say(format("diverged: the filter refused a step, or a final estimate is not finite or off by more than %g x the larger",
-             kDivergenceBound));
+  say(format(
+      "diverged: the filter refused a step, or a final estimate is not finite or off by more than %g x the larger",
+      kDivergenceBound));
   say("  of the truth and the first guess's error");
   Plotter plotter;
   std::vector<std::string> written{csvPath};
@@ -397,10 +406,11 @@ int studyCommand(const std::vector<std::string>& words) {
           if (!result.diverged) values.push_back(result.rmse[std::size_t(i)]);
         }
         diverged = long(seeds.size() - values.size());
-        line += values.empty() ? format(" %-30s %-11s", "-", "-")
-                               : format(" %-30s %-11.4g",
-                                        format("%.4g +- %.3g", detail::mean(values), detail::standardDeviation(values)).c_str(),
-                                        detail::median(values));
+        line += values.empty()
+                    ? format(" %-30s %-11s", "-", "-")
+                    : format(" %-30s %-11.4g",
+                             format("%.4g +- %.3g", detail::mean(values), detail::standardDeviation(values)).c_str(),
+                             detail::median(values));
       }
       say(line + format(" %ld/%zu", diverged, seeds.size()));
       shown.push_back(diverged < long(seeds.size()));

@@ -21,13 +21,13 @@
 
 #include "common/cli.hpp"
 #include "common/estimation.hpp"
-#include "common/format.hpp"
-#include "common/statistics.hpp"
 #include "common/experiment.hpp"
+#include "common/format.hpp"
 #include "common/plant.hpp"
 #include "common/plot.hpp"
 #include "common/report.hpp"
 #include "common/simulation.hpp"
+#include "common/statistics.hpp"
 
 namespace mjukf::examples {
 
@@ -103,7 +103,9 @@ Figure parameterFigure(const std::string& png, const std::string& title, const s
   for (int i = 0; i < Model::ParamDim; ++i) {
     const Quantity& q = Plant::parameters[std::size_t(i)];
     figure.panels.push_back(
-        {std::string(q.label) + " estimates", "time t (s)", withUnit(q),
+        {std::string(q.label) + " estimates",
+         "time t (s)",
+         withUnit(q),
          {{jointFile, 1, estimateParameterColumn<Model>(i), "JUKF", "lines lw 1.5 lc rgb '#1f77b4'", every},
           {modifiedFile, 1, estimateParameterColumn<Model>(i), "MJUKF", "lines lw 1.5 lc rgb '#d62728'", every},
           {dualFile, 1, estimateParameterColumn<Model>(i), "dual", "lines lw 1.5 lc rgb '#2ca02c'", every},
@@ -124,7 +126,9 @@ Figure stateFigure(const std::string& png, const std::string& title, const std::
   for (int i = 0; i < Model::StateDim; ++i) {
     const Quantity& q = Plant::states[std::size_t(i)];
     figure.panels.push_back(
-        {q.label, "time t (s)", withUnit(q),
+        {q.label,
+         "time t (s)",
+         withUnit(q),
          {{dataFile, 1, 2 + i, "measurement", "points pt 7 ps 0.3 lc rgb '#a0a0a0'", measurementEvery},
           {jointFile, 1, estimateStateColumn(i), "JUKF", "lines lw 1.5 lc rgb '#1f77b4'", every},
           {modifiedFile, 1, estimateStateColumn(i), "MJUKF", "lines lw 1.5 lc rgb '#d62728'", every}}});
@@ -148,8 +152,8 @@ void writeComparison(const Path& path, const std::string& prefix, const PlantDat
   written.insert(written.end(), {dataFile, jointFile, modifiedFile, dualFile});
   const std::string title = std::string(Plant::title) + ": ";
   const std::string parameters = path(prefix + "parameters.png"), states = path(prefix + "states.png");
-  if (plotter.draw(
-          parameterFigure<Plant>(parameters, title + parameterTitle, dataFile, data, jointFile, modifiedFile, dualFile)))
+  if (plotter.draw(parameterFigure<Plant>(parameters, title + parameterTitle, dataFile, data, jointFile, modifiedFile,
+                                          dualFile)))
     written.push_back(parameters);
   if (plotter.draw(stateFigure<Plant>(states, title + stateTitle, dataFile, data, jointFile, modifiedFile)))
     written.push_back(states);
@@ -157,10 +161,9 @@ void writeComparison(const Path& path, const std::string& prefix, const PlantDat
 
 // Loads `path`, or simulates `duration` seconds when it is empty.
 template <class Plant>
-PlantData<typename Plant::Experiment::Model> paperData(const std::string& path, double duration,
-                                                       std::uint64_t seed,
-                                                       const TrueParameters<typename Plant::Experiment::Model::Param>& truth,
-                                                       std::string& description) {
+PlantData<typename Plant::Experiment::Model> paperData(
+    const std::string& path, double duration, std::uint64_t seed,
+    const TrueParameters<typename Plant::Experiment::Model::Param>& truth, std::string& description) {
   using Model = typename Plant::Experiment::Model;
   const double h = Plant::Experiment::stepSize;
   if (!path.empty()) {
@@ -172,7 +175,8 @@ PlantData<typename Plant::Experiment::Model> paperData(const std::string& path, 
   }
   auto options = experimentSimulation<typename Plant::Experiment>(seed, truth);
   options.duration = duration;
-  description = format("fresh simulation (%g s, seed %llu, 30 dB SNR)", duration, static_cast<unsigned long long>(seed));
+  description =
+      format("fresh simulation (%g s, seed %llu, 30 dB SNR)", duration, static_cast<unsigned long long>(seed));
   return simulateExperiment<typename Plant::Experiment>(options);
 }
 
@@ -200,7 +204,9 @@ int paperCommand(const std::vector<std::string>& words) {
   std::error_code error;
   fs::create_directories(outDir, error);
   if (error) throw OutputError(outDir + ": cannot create the directory: " + error.message());
-  const auto path = [&](const std::string& name) { return (fs::path(outDir) / (std::string(Plant::slug) + "_" + name)).string(); };
+  const auto path = [&](const std::string& name) {
+    return (fs::path(outDir) / (std::string(Plant::slug) + "_" + name)).string();
+  };
   Plotter plotter;
   std::vector<std::string> written;
   detail::Report report;
@@ -209,7 +215,8 @@ int paperCommand(const std::vector<std::string>& words) {
   // The paper's table: JUKF and MJUKF, the paper's settings, on one data set; beside them the dual UKF
   // with the library's settings (no published value: the paper has no dual filter).
   std::string description;
-  const auto data = detail::paperData<Plant>(args.text("--data"), duration, seed, {Model::trueParameters()}, description);
+  const auto data =
+      detail::paperData<Plant>(args.text("--data"), duration, seed, {Model::trueParameters()}, description);
   const auto jointSetup = FilterSetup<Experiment>::paper(FilterKind::JointUkf);
   const auto modifiedSetup = FilterSetup<Experiment>::paper(FilterKind::ModifiedJointUkf);
   const auto dualSetup = FilterSetup<Experiment>::paper(FilterKind::DualUkf);
@@ -266,7 +273,8 @@ int paperCommand(const std::vector<std::string>& words) {
     say("");
     std::string what;
     for (int i = 0; i < Model::ParamDim; ++i)
-      what += format("%s%s %g -> %g", i > 0 ? ", " : "", Plant::parameters[std::size_t(i)].name, truth.before(i), truth.after(i));
+      what += format("%s%s %g -> %g", i > 0 ? ", " : "", Plant::parameters[std::size_t(i)].name, truth.before(i),
+                     truth.after(i));
     say(format("%s: parameter change (paper Figs. 12-14): %s at t = %g s; MJUKF xi = %g", Plant::title, what.c_str(),
                change->at, change->scaling));
     say(format("data: %s, %ld rows; RMSE over t >= %g s against the changing truth", changeDescription.c_str(),

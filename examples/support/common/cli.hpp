@@ -19,9 +19,9 @@ namespace mjukf::examples {
 /// Exit codes of the example programs.
 enum ExitCode : int {
   kExitOk = 0,
-  kExitFailure = 1,   ///< the run itself failed: a filter refused a step, an output could not be written
-  kExitBadData = 2,   ///< an input CSV file is malformed or truncated (the message names the line)
-  kExitUsage = 64,    ///< unknown subcommand or flag, missing or bad value (sysexits' EX_USAGE)
+  kExitFailure = 1,  ///< the run itself failed: a filter refused a step, an output could not be written
+  kExitBadData = 2,  ///< an input CSV file is malformed or truncated (the message names the line)
+  kExitUsage = 64,   ///< unknown subcommand or flag, missing or bad value (sysexits' EX_USAGE)
 };
 
 /// The command line was wrong; what() says how.

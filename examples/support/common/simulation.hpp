@@ -3,7 +3,7 @@
 // Simulated measurements as the paper makes them (docs/plants.md §4): the plant integrated with I-TR-BDF2 at
 // step h from x₀, then white Gaussian noise of one standard deviation for every channel,
 // σ = sqrt(var(all states) / 10^(SNR/10)), the variance taken over every channel and sample together.
-// The 2019 systems (mjukf/paper/systems_2019.hpp) are integrated with their own integrator and take
+// The 2019 systems (paper/systems_2019.hpp) are integrated with their own integrator and take
 // noise relative to the signal instead: std ρ·|yᵢ| for each component of each sample.
 
 #include <cmath>
@@ -29,8 +29,8 @@ constexpr long kMaxSimulationRows = 10'000'000;
 inline void requireSimulationDuration(const char* flag, double duration, double h) {
   if (duration > 0 && duration / h + 1 <= double(kMaxSimulationRows)) return;
   char limit[160];
-  std::snprintf(limit, sizeof limit, " needs a time > 0 s of at most %ld steps of h = %g s (%g s), not %g", kMaxSimulationRows,
-                h, double(kMaxSimulationRows - 1) * h, duration);
+  std::snprintf(limit, sizeof limit, " needs a time > 0 s of at most %ld steps of h = %g s (%g s), not %g",
+                kMaxSimulationRows, h, double(kMaxSimulationRows - 1) * h, duration);
   throw UsageError(flag + std::string(limit));
 }
 
@@ -39,7 +39,7 @@ struct SimulationOptions {
   double duration = 0;  ///< s; rows = round(duration / h) + 1
   double stepSize = 1e-3;
   std::uint64_t seed = 1;
-  double snrDb = 30;  ///< +inf for noise-free measurements
+  double snrDb = 30;         ///< +inf for noise-free measurements
   double relativeNoise = 0;  ///< > 0: noise of std relativeNoise·|yᵢ| per component, in place of the SNR
   typename Model::State initialState = Model::State::Zero();
   TrueParameters<typename Model::Param> parameters{Model::trueParameters()};

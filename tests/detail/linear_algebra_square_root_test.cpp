@@ -230,7 +230,7 @@ TYPED_TEST(SquareRoot, GramFactorRefusesARankDeficientMatrix) {
     this->fill(a);
     // Only N − 1 nonzero rows (Q = 0 and too few deviations): the last column's remainder is exactly 0.
     scratch = a;
-    scratch.bottomRows(T::Rows - (T::N - 1)).setZero();
+    scratch.template bottomRows<T::Rows - (T::N - 1)>().setZero();
     b = scratch.transpose();
     EXPECT_FALSE(lowerFactorOfGram(scratch, s)) << "rows, trial " << trial;
     EXPECT_FALSE(lowerFactorOfOuter(b, s)) << "rows, trial " << trial;
@@ -576,8 +576,8 @@ TYPED_TEST(SquareRoot, TimeUpdateFactorIsTheFactorOfTheUnscentedCovariance) {
     const typename T::Square g = psdSquareRoot(q);
     const Scalar weight = Scalar(1) / Scalar(2 * N);
     typename T::Outer b;
-    b.leftCols(2 * N) = std::sqrt(weight) * d.rightCols(2 * N);
-    b.rightCols(N) = g;
+    b.template leftCols<2 * N>() = std::sqrt(weight) * d.template rightCols<2 * N>();
+    b.template rightCols<N>() = g;
     typename T::Square s;
     ASSERT_TRUE(lowerFactorOfOuter(b, s));
     const typename T::Vector centre = std::sqrt(std::abs(centreWeight)) * d.col(0);

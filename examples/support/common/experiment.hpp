@@ -1,7 +1,7 @@
 #pragma once
 
-// What the example programs read from an experiment's settings (mjukf/paper/experiments.hpp,
-// mjukf/paper/systems_2019.hpp) beyond the filters' presets, with the paper's plants' choices where an
+// What the example programs read from an experiment's settings (paper/experiments.hpp,
+// paper/systems_2019.hpp) beyond the filters' presets, with the paper's plants' choices where an
 // experiment says nothing: the integrator (I-TR-BDF2), the true initial state (the filters' x̂₀) and the
 // measurement noise (white, 30 dB SNR; or, where the experiment gives `relativeNoise`, std ρ·|xᵢ|).
 

@@ -27,8 +27,7 @@ void printUsage(std::ostream& out) {
       << (change ? " [--change-at T]" : "") << "\n"
       << "      Simulates the plant (" << Plant::simulation << ") and writes\n"
       << "      t, y1..ym, x1_true..xn_true, theta1_true..thetap_true, one row per step.\n"
-      << (change ? "      --change-at T runs the parameter-change scenario (30 s unless --duration).\n" : "")
-      << "\n"
+      << (change ? "      --change-at T runs the parameter-change scenario (30 s unless --duration).\n" : "") << "\n"
       << "  estimate --filter ukf|jukf|mjukf|dual --data FILE --out FILE [settings]\n"
       << "      Runs a filter with the preset settings and schedule over the measurements y1..ym of FILE and\n"
       << "      writes t, x1..xn, theta1..thetap, one row per data row; prints the parameter RMSEs and\n"
@@ -52,9 +51,11 @@ void printUsage(std::ostream& out) {
       << "[--jobs N] [--out-dir DIR] [--duration S]\n"
       << "      The filters over many noise draws, one simulation per seed (default 1-20; ranges and lists such\n"
       << "      as 1-100 or 1,5,9-12), --jobs threads (default: every core; the results do not depend on it).\n"
-      << "      Filters: jukf, mjukf, dual" << (detail::studyFilters<typename Plant::Experiment::Model>().size() > 3 ? ", mjukf-auto" : "")
-      << " (default jukf,mjukf" << (detail::studyFilters<typename Plant::Experiment::Model>().size() > 3 ? ",mjukf-auto" : "")
-      << "). Writes DIR/" << Plant::slug << "_study.csv\n"
+      << "      Filters: jukf, mjukf, dual"
+      << (detail::studyFilters<typename Plant::Experiment::Model>().size() > 3 ? ", mjukf-auto" : "")
+      << " (default jukf,mjukf"
+      << (detail::studyFilters<typename Plant::Experiment::Model>().size() > 3 ? ",mjukf-auto" : "") << "). Writes DIR/"
+      << Plant::slug << "_study.csv\n"
       << "      (one row per seed x filter: RMSEs, diverged, status), a table of mean +- sd and median per filter\n"
       << "      and a box plot per scenario (default DIR study_" << Plant::slug << "). docs/studies.md.\n"
       << "\n"

@@ -18,8 +18,7 @@ namespace mjukf::examples {
 class CsvError : public std::runtime_error {
  public:
   CsvError(const std::string& path, long line, const std::string& what)
-      : std::runtime_error(path + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": " + what),
-        line_(line) {}
+      : std::runtime_error(path + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": " + what), line_(line) {}
   /// The 1-based line of the problem, 0 when it concerns the whole file.
   long line() const { return line_; }
 
@@ -75,9 +74,9 @@ void splitFields(std::string_view line, Field&& field) {
 
 }  // namespace detail
 
-/// Reads a whole CSV file, skipping a leading UTF-8 byte order mark. Throws CsvError with the line number for a missing file, an empty file, a
-/// duplicated column name, a row with too few or too many fields, or a field that is not a number
-/// (NaN and infinities are accepted as numbers here; loadPlantData refuses them in the columns it uses).
+/// Reads a whole CSV file, skipping a leading UTF-8 byte order mark. Throws CsvError with the line number for a missing
+/// file, an empty file, a duplicated column name, a row with too few or too many fields, or a field that is not a
+/// number (NaN and infinities are accepted as numbers here; loadPlantData refuses them in the columns it uses).
 inline CsvTable readCsv(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw CsvError(path, 0, "cannot open the file");

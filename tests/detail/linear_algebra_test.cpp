@@ -1,0 +1,130 @@
+// detail/linear_algebra.hpp, kernel by kernel, against Eigen's general routines or the definition:
+// the fixed-size Cholesky factor and its refusal margin, the triangular solves, the symmetrisation, the
+// weighted moments, the whitening of a cross-covariance and the symmetric sigma-point draw. Tolerances
+// are rounding bounds: a few ε times the size of the problem and of its entries.
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include <Eigen/Cholesky>
+#include <gtest/gtest.h>
+
+#include "mjukf/detail/linear_algebra.hpp"
+#include "test_support.hpp"
+
+namespace {
+
+using mjukf::detail::allFinite;
+using mjukf::detail::choleskyLower;
+constexpr double kEps = std::numeric_limits<double>::epsilon();
+
+template <int N>
+void expectCholeskyMatchesEigen(std::mt19937_64& rng) {
+  const Eigen::Matrix<double, N, N> a = mjukf::testing::randomCovariance<N>(rng);
+  Eigen::Matrix<double, N, N> s;
+  ASSERT_TRUE(choleskyLower(a, s));
+  const Eigen::Matrix<double, N, N> reference = a.llt().matrixL();
+  // Backward stable: S Sᵀ = A + E with |E| ≤ c N ε |A|; the factors agree to the condition number.
+  EXPECT_LT((s * s.transpose() - a).cwiseAbs().maxCoeff(), 4 * N * kEps * a.cwiseAbs().maxCoeff());
+  EXPECT_LT((s - reference).cwiseAbs().maxCoeff(), 1e-10 * reference.cwiseAbs().maxCoeff());
+  EXPECT_TRUE((s.template triangularView<Eigen::StrictlyUpper>().toDenseMatrix().array() == 0).all());
+}
+
+TEST(LinearAlgebra, CholeskyEqualsEigensAtEverySize) {
+  std::mt19937_64 rng(3);
+  for (int trial = 0; trial < 20; ++trial) {
+    expectCholeskyMatchesEigen<1>(rng);
+    expectCholeskyMatchesEigen<2>(rng);
+    expectCholeskyMatchesEigen<6>(rng);
+    expectCholeskyMatchesEigen<13>(rng);
+  }
+}
+
+TEST(LinearAlgebra, CholeskyRefusesSingularIndefiniteAndNonFinite) {
+  Eigen::Matrix3d s;
+  EXPECT_FALSE(choleskyLower(Eigen::Matrix3d(Eigen::Matrix3d::Constant(0.5)), s));  // rank 1: pivots are rounding
+  EXPECT_FALSE(choleskyLower(Eigen::Matrix3d(Eigen::Vector3d(1.0, -1e-3, 1.0).asDiagonal()), s));
+  Eigen::Matrix3d nan = Eigen::Matrix3d::Identity();
+  nan(2, 1) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(choleskyLower(nan, s));
+  EXPECT_FALSE(choleskyLower(Eigen::Matrix3d(Eigen::Vector3d::Constant(INFINITY).asDiagonal()), s));
+}
+
+TEST(LinearAlgebra, TriangularSolvesInvertTheFactor) {
+  std::mt19937_64 rng(4);
+  const Eigen::Matrix4d a = mjukf::testing::randomCovariance<4>(rng);
+  Eigen::Matrix4d s;
+  ASSERT_TRUE(choleskyLower(a, s));
+  const Eigen::Matrix<double, 4, 3> b = Eigen::Matrix<double, 4, 3>::Random();
+  Eigen::Matrix<double, 4, 3> x = b;
+  mjukf::detail::solveLowerInPlace(s, x);  // S x = b
+  EXPECT_LT((s * x - b).cwiseAbs().maxCoeff(), 100 * kEps);
+  x = b;
+  mjukf::detail::solveUpperInPlace(s, x);  // Sᵀ x = b
+  EXPECT_LT((s.transpose() * x - b).cwiseAbs().maxCoeff(), 100 * kEps);
+  // U = C S⁻ᵀ, i.e. U Sᵀ = C, column by column.
+  const Eigen::Matrix<double, 3, 4> c = Eigen::Matrix<double, 3, 4>::Random();
+  Eigen::Matrix<double, 3, 4> u = c;
+  mjukf::detail::whitenColumns(s, u);
+  EXPECT_LT((u * s.transpose() - c).cwiseAbs().maxCoeff(), 100 * kEps);
+}
+
+TEST(LinearAlgebra, SymmetrizeAveragesTheTwoTrianglesAndKeepsTheDiagonal) {
+  Eigen::Matrix3d p;
+  p << 1, 2, 3, 4, 5, 6, 7, 8, 9;
+  mjukf::detail::symmetrize(p);
+  Eigen::Matrix3d expected;
+  expected << 1, 3, 5, 3, 5, 7, 5, 7, 9;
+  EXPECT_EQ(p, expected);
+  Eigen::Matrix2d huge;  // halved before the sum: no overflow near the largest double
+  huge << 1, 1.5e308, 1.7e308, 1;
+  mjukf::detail::symmetrize(huge);
+  EXPECT_TRUE(allFinite(huge));
+}
+
+TEST(LinearAlgebra, WeightedMomentsAreTheirDefinitions) {
+  std::mt19937_64 rng(5);
+  const Eigen::Matrix<double, 3, 7> a = Eigen::Matrix<double, 3, 7>::Random();
+  const Eigen::Matrix<double, 2, 7> b = Eigen::Matrix<double, 2, 7>::Random();
+  const Eigen::Matrix<double, 7, 1> w = Eigen::Matrix<double, 7, 1>::Random();
+  Eigen::Vector3d mean;
+  mjukf::detail::weightedMean(a, w, mean);
+  Eigen::Matrix<double, 3, 2> outer;
+  mjukf::detail::weightedOuterSum(a, b, w, outer);
+  Eigen::Vector3d meanByHand = Eigen::Vector3d::Zero();
+  Eigen::Matrix<double, 3, 2> outerByHand = Eigen::Matrix<double, 3, 2>::Zero();
+  for (int i = 0; i < 7; ++i) {
+    meanByHand += w(i) * a.col(i);
+    outerByHand += w(i) * a.col(i) * b.col(i).transpose();
+  }
+  EXPECT_LT((mean - meanByHand).cwiseAbs().maxCoeff(), 16 * kEps);
+  EXPECT_LT((outer - outerByHand).cwiseAbs().maxCoeff(), 16 * kEps);
+}
+
+TEST(LinearAlgebra, SymmetricDrawWithAndWithoutCentre) {
+  Eigen::Matrix2d s;
+  s << 2, 0, 1, 3;
+  const Eigen::Vector2d mean(10, 20);
+  Eigen::Matrix<double, 2, 5> merwe;
+  mjukf::detail::drawSymmetricPoints<true>(mean, s, 0.5, merwe);
+  Eigen::Matrix<double, 2, 5> expected;
+  expected << 10, 11, 10, 9, 10,  //
+      20, 20.5, 21.5, 19.5, 18.5;
+  EXPECT_EQ(merwe, expected);
+  Eigen::Matrix<double, 2, 4> cubature;
+  mjukf::detail::drawSymmetricPoints<false>(mean, s, 0.5, cubature);
+  EXPECT_EQ(cubature, expected.rightCols<4>());
+}
+
+TEST(LinearAlgebra, FinitenessChecks) {
+  Eigen::Vector3d y(1, 2, 3);
+  EXPECT_TRUE(allFinite(y));
+  y(1) = -INFINITY;
+  EXPECT_FALSE(allFinite(y));
+  Eigen::Matrix<bool, 3, 1> present(true, false, true);
+  EXPECT_TRUE(mjukf::detail::presentComponentsFinite(y, &present));  // the missing one is ignored
+  EXPECT_FALSE(mjukf::detail::presentComponentsFinite(y, static_cast<const Eigen::Matrix<bool, 3, 1>*>(nullptr)));
+}
+
+}  // namespace
