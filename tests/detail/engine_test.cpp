@@ -8,6 +8,8 @@
 
 #include <limits>
 #include <random>
+#include <string>
+#include <type_traits>
 
 #include <Eigen/LU>
 #include <gtest/gtest.h>
@@ -43,7 +45,13 @@ class EngineEstimate : public ::testing::Test {
   }
 };
 using Forms = ::testing::Types<mjukf::FullCovariance, mjukf::SquareRootCovariance>;
-TYPED_TEST_SUITE(EngineEstimate, Forms);
+struct FormName {
+  template <class Form>
+  static std::string GetName(int) {
+    return std::is_same_v<Form, mjukf::FullCovariance> ? "Full" : "SquareRoot";
+  }
+};
+TYPED_TEST_SUITE(EngineEstimate, Forms, FormName);
 
 TYPED_TEST(EngineEstimate, PredictionOfALinearMapIsTheKalmanPrediction) {
   LinearCase c;
