@@ -26,6 +26,7 @@ struct FullCovariance {};
 /// falls back to the full form's P and its repair (docs/algorithms.md §10).
 struct SquareRootCovariance {};
 
+/// \cond INTERNAL
 namespace detail {
 /// True for the square-root form; a static_assert of the estimate refuses any other tag than the two.
 template <class Form>
@@ -34,5 +35,6 @@ template <class Form>
 inline constexpr bool isCovarianceForm =
     std::is_same_v<Form, FullCovariance> || std::is_same_v<Form, SquareRootCovariance>;
 }  // namespace detail
+/// \endcond
 
 }  // namespace mjukf

@@ -296,11 +296,8 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
 /// each correction. Every matrix is sized at compile time and no per-step call allocates; a call that
 /// returns a Status other than Ok or Repaired leaves the filter exactly as it was.
 ///
-/// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
-/// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
-/// `PointSet` is the sigma-point set (sigma_points.hpp) and `Form` the covariance form
-/// (covariance_form.hpp): `FullCovariance`, the default, or `SquareRootCovariance`; the parameter
-/// filter has the state filter's set and form.
+/// Template arguments: docs/design.md, "Template arguments of every filter"; the parameter filter has
+/// the state filter's sigma-point set and covariance form.
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled,
           class Form = FullCovariance>
 class DualUkf : public detail::EngineOf<

@@ -261,12 +261,8 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
 /// set T and one ξ per parameter from the sensitivities instead, for p more propagations per time
 /// update (parameter_sensitivity.hpp, docs/tuning-mjukf.md).
 ///
-/// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
-/// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
-/// `PointSet` is the sigma-point set (sigma_points.hpp; 2n + 1 points) and `Form` the covariance form
-/// (covariance_form.hpp): `FullCovariance`, the default, or `SquareRootCovariance`. Eqs. 9–10 touch
-/// no covariance, so they are the same in both forms; the automatic modes read U and the factor S of
-/// P_yy, which both forms provide.
+/// Template arguments: docs/design.md, "Template arguments of every filter"; the sigma-point set must
+/// have 2n + 1 points. Eqs. 9–10 touch no covariance, so they are the same in both covariance forms.
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled,
           class Form = FullCovariance>
 class ModifiedJointUkf

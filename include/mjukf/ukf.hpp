@@ -79,10 +79,7 @@ class KnownParameters : public ParameterPolicy<Model, Integrator, Settings, Est>
 /// was. The per-step calls (`timeUpdate`, `propagateMean`, `measurementUpdate`) are those of the shared
 /// engine, detail/unscented_engine.hpp.
 ///
-/// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
-/// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
-/// `PointSet` is the sigma-point set (sigma_points.hpp) and `Form` the covariance form
-/// (covariance_form.hpp): `FullCovariance`, the default, or `SquareRootCovariance`.
+/// Template arguments: docs/design.md, "Template arguments of every filter".
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled,
           class Form = FullCovariance>
 class Ukf : public detail::EngineOf<Ukf<Model_, Integrator_, PointSet, Form>, Model_, Integrator_,

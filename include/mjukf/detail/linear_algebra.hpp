@@ -234,6 +234,33 @@ struct NonDeducedType {
 template <class T>
 using NonDeduced = typename NonDeducedType<T>::type;
 
+// One Householder reflection of the triangularisations below (the LAPACK one, dlarfg without its
+// rescaling): H = I − τ u uᵀ with u = (1, x₁/v₀, …), v₀ = α + sign(α) σ (no cancellation),
+// τ = (σ + |α|)/σ ∈ [1, 2], which maps x = (α, x₁, …) to −sign(α) σ e₁; `sign` is −sign(α) (the sign
+// of R(j, j), moved into column j of S) and `scale` = 1/v₀. Refused (false) when σ² is not above the
+// margin of row j of S: ‖row j‖² = Σₖ<ⱼ s_jk² + σ², the reflections so far having kept its norm. NaN
+// and an overflowed σ² fail too.
+template <class Scalar>
+struct Reflection {
+  Scalar sigma, tau, sign, scale;
+};
+template <int j, int m, class Segment, class Scalar, int N>
+bool reflectionOf(const Segment& x, const Eigen::Matrix<Scalar, N, N>& s, Reflection<Scalar>& h) {
+  constexpr Scalar margin2 = squareRootMargin<Scalar, N>() * squareRootMargin<Scalar, N>();  // on squares
+  const Scalar alpha = x(0);
+  Scalar sigma2 = alpha * alpha;
+  if constexpr (m > 1) sigma2 += x.template tail<m - 1>().squaredNorm();
+  Scalar above2 = Scalar(0);
+  if constexpr (j > 0) above2 = s.row(j).template head<j>().squaredNorm();
+  if (!(sigma2 > margin2 * (above2 + sigma2))) return false;
+  h.sigma = std::sqrt(sigma2);
+  const Scalar magnitude = std::abs(alpha) + h.sigma;  // |v₀|
+  h.tau = magnitude / h.sigma;
+  h.sign = alpha < Scalar(0) ? Scalar(1) : Scalar(-1);
+  h.scale = -h.sign / magnitude;
+  return true;
+}
+
 // S lower triangular with S Sᵀ = Aᵀ A, by Householder QR of A in place (A = Q R, S = Rᵀ with the signs
 // of its columns chosen so that diag(S) > 0; the strictly upper part of S is set to zero). A is scratch
 // afterwards. Returns false, S then unspecified, when A has a NaN or Inf, or when AᵀA is not
@@ -242,31 +269,19 @@ using NonDeduced = typename NonDeducedType<T>::type;
 // underflow or overflow fail, as they would in P. In the SR-UKF, A is the (2L + L) × L matrix whose rows
 // are the √Wcᵢ (χᵢ − x̂), i ≥ 1, and the rows of Gᵀ, Q = G Gᵀ.
 //
-// Each reflection is the LAPACK one (dlarfg without its rescaling): H = I − τ u uᵀ with u = (1, x₁/v₀,
-// …), v₀ = α + sign(α) σ (no cancellation), τ = (σ + |α|)/σ ∈ [1, 2], which maps x = (α, x₁, …) to
-// −sign(α) σ e₁; its sign is then moved into column j of S. The reflection is applied to each later
-// column by one fixed-length dot product and one axpy of contiguous (column-major) coefficients.
+// Each reflection (reflectionOf) is applied to each later column by one fixed-length dot product and
+// one axpy of contiguous (column-major) coefficients.
 template <class Scalar, int Rows, int N>
 bool lowerFactorOfGram(Eigen::Matrix<Scalar, Rows, N>& a, Eigen::Matrix<Scalar, N, N>& s) {
   static_assert(N >= 1 && Rows >= N, "the Gram factor needs at least as many rows as columns");
-  constexpr Scalar margin2 = squareRootMargin<Scalar, N>() * squareRootMargin<Scalar, N>();  // on squares
   if (!allFinite(a)) return false;
   return forEachIndex<N>([&](auto jIndex) {
     constexpr int j = jIndex.value;
     constexpr int m = Rows - j;  // coefficients of column j from the diagonal down
     auto x = a.col(j).template segment<m>(j);
-    const Scalar alpha = x(0);
-    Scalar sigma2 = alpha * alpha;
-    if constexpr (m > 1) sigma2 += x.template tail<m - 1>().squaredNorm();
-    // ‖aⱼ‖² = Σₖ<ⱼ s_jk² + σ²: the reflections so far kept the column's norm.
-    Scalar above2 = Scalar(0);
-    if constexpr (j > 0) above2 = s.row(j).template head<j>().squaredNorm();
-    if (!(sigma2 > margin2 * (above2 + sigma2))) return false;  // NaN and an overflowed σ² fail too
-    const Scalar sigma = std::sqrt(sigma2);
-    const Scalar magnitude = std::abs(alpha) + sigma;  // |v₀|
-    const Scalar tau = magnitude / sigma;
-    const Scalar sign = alpha < Scalar(0) ? Scalar(1) : Scalar(-1);  // of R(j, j) = −sign(α) σ
-    const Scalar scale = -sign / magnitude;                          // 1 / v₀: u = (1, scale x₁, …)
+    Reflection<Scalar> h;
+    if (!reflectionOf<j, m>(x, s, h)) return false;
+    const Scalar sigma = h.sigma, tau = h.tau, sign = h.sign, scale = h.scale;
     s(j, j) = sigma;
     for (int k = j + 1; k < N; ++k) {
       auto y = a.col(k).template segment<m>(j);
@@ -291,27 +306,18 @@ bool lowerFactorOfGram(Eigen::Matrix<Scalar, Rows, N>& a, Eigen::Matrix<Scalar, 
 template <class Scalar, int N, int Cols>
 bool lowerFactorOfOuter(Eigen::Matrix<Scalar, N, Cols>& b, Eigen::Matrix<Scalar, N, N>& s) {
   static_assert(N >= 1 && Cols >= N, "the factor of B Bᵀ needs at least as many columns as rows");
-  constexpr Scalar margin2 = squareRootMargin<Scalar, N>() * squareRootMargin<Scalar, N>();
   if (!allFinite(b)) return false;
   return forEachIndex<N>([&](auto jIndex) {
     constexpr int j = jIndex.value;
     constexpr int m = Cols - j;       // coefficients of row j from the diagonal right
     constexpr int below = N - j - 1;  // rows the reflection is applied to
     auto x = b.row(j).template segment<m>(j);
-    const Scalar alpha = x(0);
-    Scalar sigma2 = alpha * alpha;
-    if constexpr (m > 1) sigma2 += x.template tail<m - 1>().squaredNorm();
-    Scalar above2 = Scalar(0);
-    if constexpr (j > 0) above2 = s.row(j).template head<j>().squaredNorm();
-    if (!(sigma2 > margin2 * (above2 + sigma2))) return false;
-    const Scalar sigma = std::sqrt(sigma2);
-    const Scalar magnitude = std::abs(alpha) + sigma;
-    const Scalar tau = magnitude / sigma;
-    const Scalar sign = alpha < Scalar(0) ? Scalar(1) : Scalar(-1);
+    Reflection<Scalar> h;
+    if (!reflectionOf<j, m>(x, s, h)) return false;
+    const Scalar sigma = h.sigma, tau = h.tau, sign = h.sign, scale = h.scale;
     s(j, j) = sigma;
     forEachIndex<j>([&](auto i) { return s(i.value, j) = Scalar(0), true; });
     if constexpr (below > 0) {
-      const Scalar scale = -sign / magnitude;  // 1 / v₀: u = (1, scale x₁, …)
       // w = τ B u, its sum over the unscaled x first, which does not wait for σ's root and division.
       Eigen::Matrix<Scalar, below, 1> sum = Eigen::Matrix<Scalar, below, 1>::Zero();
       for (int c = j + 1; c < Cols; ++c) sum += b(j, c) * b.col(c).template segment<below>(j + 1);
