@@ -75,31 +75,35 @@ inline const char* filterName(FilterKind kind) {
   return "?";
 }
 
-template <FilterKind Kind, class Model>
-using FilterType =
-    std::conditional_t<Kind == FilterKind::Ukf, Ukf<Model>,
-                       std::conditional_t<Kind == FilterKind::Jukf, JointUkf<Model>,
-                                          std::conditional_t<Kind == FilterKind::Mjukf || Kind == FilterKind::MjukfAuto,
-                                                             ModifiedJointUkf<Model>, DualUkf<Model>>>>;
+/// The filter of kind `Kind` over `Model`, with the default stepper and sigma points, in the covariance
+/// form `Form` (covariance_form.hpp).
+template <FilterKind Kind, class Model, class Form = FullCovariance>
+using FilterType = std::conditional_t<
+    Kind == FilterKind::Ukf, Ukf<Model, DefaultIntegrator<Model>, MerweScaled, Form>,
+    std::conditional_t<Kind == FilterKind::Jukf, JointUkf<Model, DefaultIntegrator<Model>, MerweScaled, Form>,
+                       std::conditional_t<Kind == FilterKind::Mjukf || Kind == FilterKind::MjukfAuto,
+                                          ModifiedJointUkf<Model, DefaultIntegrator<Model>, MerweScaled, Form>,
+                                          DualUkf<Model, DefaultIntegrator<Model>, MerweScaled, Form>>>>;
 
 /// The filter of kind `Kind` with the settings of `Experiment`, on `model` (the plant's model or a
 /// counting wrapper of it). The UKF is given the true parameters, the others the first guess.
-template <FilterKind Kind, class Experiment, class Model = typename Experiment::Model>
-FilterType<Kind, Model> makeFilter(const Model& model = Model()) {
+template <FilterKind Kind, class Experiment, class Model = typename Experiment::Model, class Form = FullCovariance>
+FilterType<Kind, Model, Form> makeFilter(const Model& model = Model()) {
+  using Filter = FilterType<Kind, Model, Form>;
   const auto x0 = Experiment::initialState();
   if constexpr (Kind == FilterKind::Ukf)
-    return FilterType<Kind, Model>(model, x0, Experiment::Model::trueParameters(), Experiment::ukf());
+    return Filter(model, x0, Experiment::Model::trueParameters(), Experiment::ukf());
   else if constexpr (Kind == FilterKind::Jukf)
-    return FilterType<Kind, Model>(model, x0, Experiment::initialParameters(), Experiment::jointUkf());
+    return Filter(model, x0, Experiment::initialParameters(), Experiment::jointUkf());
   else if constexpr (Kind == FilterKind::Mjukf)
-    return FilterType<Kind, Model>(model, x0, Experiment::initialParameters(), Experiment::modifiedJointUkf());
+    return Filter(model, x0, Experiment::initialParameters(), Experiment::modifiedJointUkf());
   else if constexpr (Kind == FilterKind::MjukfAuto) {
     auto settings = Experiment::modifiedJointUkf();
     settings.automaticTransformation = true;
     settings.adaptiveScaling = true;
-    return FilterType<Kind, Model>(model, x0, Experiment::initialParameters(), settings);
+    return Filter(model, x0, Experiment::initialParameters(), settings);
   } else
-    return FilterType<Kind, Model>(model, x0, Experiment::initialParameters(), Experiment::dualUkf());
+    return Filter(model, x0, Experiment::initialParameters(), Experiment::dualUkf());
 }
 
 /// Measurements y_k = x(k h) + v_k of the plant with its true parameters, simulated with I-TR-BDF2

@@ -4,7 +4,8 @@
 //
 //   valgrind --tool=callgrind --collect-atstart=no mjukf_instruction_counts [substring]
 //
-// For each case (<kind>/<plant>/<filter>/<scalar>, kind step, open or floor) it takes kWarmUp steps
+// For each case (<kind>/<plant>/<filter>/<scalar>, kind step, step_sr (the square-root covariance
+// form), open or floor) it takes kWarmUp steps
 // uncounted, then counts kCounted steps and dumps callgrind's totals under the case's name; per step is
 // the total over kCounted. Run natively, it runs the same steps and counts nothing.
 
@@ -42,7 +43,9 @@ bool countFilter(const char* only) {
   using Scalar = typename Experiment::Model::Scalar;
   const std::string suffix =
       std::string("/") + plantName<Experiment>() + "/" + filterName(Kind) + "/" + scalarName<Scalar>();
+  // The square-root form's measurement step (`step_sr/…`); its floor and open-loop step are the full form's.
   return count<MeasurementSteps<Kind, Experiment>>("step" + suffix, only) &&
+         count<MeasurementSteps<Kind, Experiment, SquareRootCovariance>>("step_sr" + suffix, only) &&
          count<OpenLoopSteps<Kind, Experiment>>("open" + suffix, only) &&
          count<FloorSteps<Kind, Experiment>>("floor" + suffix, only);
 }

@@ -50,8 +50,8 @@ def main():
     print(f"Instructions per step (callgrind, Release, no `-march`; mean of {max(steps.values())} steps after "
           f"200 uncounted ones; commit `{commit}`):")
     print()
-    print("| plant | filter | scalar | step | floor | step/floor | open |")
-    print("|---|---|---|---|---|---|---|")
+    print("| plant | filter | scalar | step | floor | step/floor | open | step, square root | square root/full |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for scalar in ("double", "float"):
         for p in PLANTS:
             for f in FILTERS:
@@ -59,7 +59,8 @@ def main():
                 if "step" + s not in per_step:
                     continue
                 print(f"| {p} | {LABELS[f]} | {scalar} | {cell('step' + s)} | {cell('floor' + s)} | "
-                      f"{ratio('step' + s, 'floor' + s)} | {cell('open' + s)} |")
+                      f"{ratio('step' + s, 'floor' + s)} | {cell('open' + s)} | {cell('step_sr' + s)} | "
+                      f"{ratio('step_sr' + s, 'step' + s)} |")
 
 
 if __name__ == "__main__":

@@ -23,6 +23,8 @@ PLANTS = ["flexible_joint", "coupled_tank"]
 # dual UKF with the library's settings (the paper has none, so it has no reference time and no goal).
 FILTERS = ["ukf", "jukf", "mjukf", "mjukf_auto", "dual"]
 LABELS = {"ukf": "UKF", "jukf": "JUKF", "mjukf": "MJUKF", "mjukf_auto": "MJUKF automatic", "dual": "dual"}
+# The same filters in the square-root covariance form: step benchmarks only (`step/<plant>/<filter>_sr`).
+SQUARE_ROOT = "_sr"
 GOAL_FILTERS = ["ukf", "jukf", "mjukf"]
 UNIT_NS = {"ns": 1.0, "us": 1e3, "ms": 1e6, "s": 1e9}
 
@@ -230,6 +232,28 @@ def main():
             if native:
                 sn, fn = get(native, f"step/{p}/{f}"), get(native, f"floor/{p}/{f}")
                 row += f" {fmt_ns(sn)} | {fmt_ns(fn)} | {fmt_ratio(ratio(sn, fn))} |"
+            w(row)
+    w("")
+    w("The same measurement step with the filter in the square-root covariance form (`step/<plant>/<filter>_sr`,")
+    w("`SquareRootCovariance`, docs/algorithms.md §10; the floor and the open-loop step are the full form's):")
+    w("")
+    head = "| plant | filter | step full | step square root | square root/full | step full float | step square root float | square root/full float |"
+    sep = "|---|---|---|---|---|---|---|---|"
+    if native:
+        head += " square root/full (native) |"
+        sep += "---|"
+    w(head)
+    w(sep)
+    for p in PLANTS:
+        for f in FILTERS:
+            full, sr = get(plain, f"step/{p}/{f}"), get(plain, f"step/{p}/{f}{SQUARE_ROOT}")
+            if sr is None:
+                continue
+            ff, sf = get(plain, f"step/{p}/{f}/float"), get(plain, f"step/{p}/{f}{SQUARE_ROOT}/float")
+            row = (f"| {p} | {label(f)} | {fmt_ns(full)} | {fmt_ns(sr)} | {fmt_ratio(ratio(sr, full))} | {fmt_ns(ff)} | "
+                   f"{fmt_ns(sf)} | {fmt_ratio(ratio(sf, ff))} |")
+            if native:
+                row += f" {fmt_ratio(ratio(get(native, f'step/{p}/{f}{SQUARE_ROOT}'), get(native, f'step/{p}/{f}')))} |"
             w(row)
     w("")
     w("MJUKF/JUKF time ratio per plant (the paper's claim: fewer points, cheaper step):")

@@ -9,6 +9,8 @@
 // (Experiment::dualUkf(), PriorParameters ordering), whose floor is its (2n + 1) + (2p + 1) one-step
 // propagations: the state filter's 2n + 1 points with θ̂ and the parameter filter's 2p + 1 of x̂, each
 // with its θⱼ (docs/design.md). Names without a suffix are double; /float the same in float.
+// step/<plant>/<filter>_sr[/float]: the same step with the filter in the square-root covariance form
+// (covariance_form.hpp; its floor and open-loop step are the full form's, which the report reuses).
 //
 // Counters: points (sigma points per time update; the dual: of both its filters, (2n + 1) + (2p + 1)),
 // f_evals and u_evals (model derivative and input evaluations per step, counted on one step of a
@@ -32,9 +34,9 @@ void setCounters(benchmark::State& state, bool measurementStep) {
   state.counters["u_evals"] = double(counts.input);
 }
 
-template <FilterKind Kind, class Experiment>
+template <FilterKind Kind, class Experiment, class Form = FullCovariance>
 void measurementStep(benchmark::State& state) {
-  MeasurementSteps<Kind, Experiment> steps;
+  MeasurementSteps<Kind, Experiment, Form> steps;
   for (auto _ : state) {
     if (!steps.once()) {
       state.SkipWithError(("filter refused step " + std::to_string(steps.row())).c_str());
@@ -80,6 +82,9 @@ void registerFilter() {
   benchmark::RegisterBenchmark(("step" + suffix).c_str(), measurementStep<Kind, Experiment>);
   benchmark::RegisterBenchmark(("floor" + suffix).c_str(), floorStep<Kind, Experiment>);
   benchmark::RegisterBenchmark(("open" + suffix).c_str(), openLoopStep<Kind, Experiment>);
+  const std::string squareRoot = std::string("/") + plantName<Experiment>() + "/" + filterName(Kind) + "_sr" +
+                                 (std::is_same_v<Scalar, float> ? "/float" : "");
+  benchmark::RegisterBenchmark(("step" + squareRoot).c_str(), measurementStep<Kind, Experiment, SquareRootCovariance>);
 }
 
 template <class Experiment>

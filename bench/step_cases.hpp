@@ -3,7 +3,7 @@
 // The three per-step cases that the step benchmarks time and the instruction counter counts, so both
 // measure the same code:
 //   MeasurementSteps: one measurement step of the paper's schedule, a time update over one integrator
-//     step followed by a measurement update, on simulated measurements;
+//     step followed by a measurement update, on simulated measurements (in either covariance form);
 //   OpenLoopSteps: one open-loop step of the mean (the schedule's steps between measurements);
 //   FloorSteps: the model propagations a measurement step cannot avoid, written out by hand: one
 //     I-TR-BDF2 step of each of the filter's points (each with the parameters the filter would give
@@ -65,11 +65,11 @@ EvaluationCounts countEvaluations(bool measurementStep) {
   return counts;
 }
 
-template <FilterKind Kind, class Experiment>
+template <FilterKind Kind, class Experiment, class Form = FullCovariance>
 class MeasurementSteps {
  public:
   using Scalar = typename Experiment::Model::Scalar;
-  MeasurementSteps() : fresh_(makeFilter<Kind, Experiment>()), filter_(fresh_) {}
+  MeasurementSteps() : fresh_(makeFilter<Kind, Experiment, typename Experiment::Model, Form>()), filter_(fresh_) {}
   /// One step; false when the filter refused it.
   bool once() {
     if (k_ + 1 == kRows) restart();
@@ -87,7 +87,7 @@ class MeasurementSteps {
     filter_ = fresh_;
     k_ = 0;
   }
-  FilterType<Kind, typename Experiment::Model> fresh_, filter_;
+  FilterType<Kind, typename Experiment::Model, Form> fresh_, filter_;
   long k_ = 0;
 };
 

@@ -105,13 +105,14 @@ compare_runs "$out/target.txt" "$out/host.txt"
 [ "$figures" = --figures ] || exit 0
 
 echo "== figures: flash of each filter (image minus the plant-only image), -O2 and -Os"
-build_firmware "$out/Os" -Os robot_all robot_none robot_ukf robot_jukf robot_mjukf robot_dual
-build_firmware "$out/O2" -O2 robot_none robot_ukf robot_jukf robot_mjukf robot_dual
+filters="ukf jukf mjukf dual ukf_sr jukf_sr mjukf_sr dual_sr"
+build_firmware "$out/Os" -Os robot_all robot_none $(printf 'robot_%s ' $filters)
+build_firmware "$out/O2" -O2 robot_none $(printf 'robot_%s ' $filters)
 run_firmware "$out/Os/robot_all.elf" "$out/target-Os.txt"
 for opt in O2 Os; do
   base=$(arm-none-eabi-size "$out/$opt/robot_none.elf" | awk 'NR == 2 { print $1 + $2 }')
   echo "-$opt: plant-only image $base B (text + data)"
-  for f in ukf jukf mjukf dual all; do
+  for f in $filters all; do
     size=$(arm-none-eabi-size "$out/$opt/robot_$f.elf" | awk 'NR == 2 { print $1 + $2 }')
     echo "  $f: $size B, own cost $((size - base)) B"
   done
@@ -119,7 +120,7 @@ done
 echo "== figures: per filter, from the runs (-O2, then -Os)"
 for run in target target-Os; do
   awk '$1 == "clock" { perTick = $3 / $5 }
-       $1 == "fig" { printf "  %-6s sizeof %5d B  stack %4d B  instructions/measurement step %6.0f  /open-loop step %5.0f\n",
+       $1 == "fig" { printf "  %-8s sizeof %5d B  stack %4d B  instructions/measurement step %6.0f  /open-loop step %5.0f\n",
                      $3, $5, $15, $7 * perTick / $9, $11 * perTick / $13 }
        $1 == "clock" { printf "  %s instructions / %s ticks = %.3f instructions a tick\n", $3, $5, perTick }
        $1 == "heap" { print "  heap calls " $3 }' "$out/$run.txt"

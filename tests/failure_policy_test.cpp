@@ -1,7 +1,9 @@
 // The failure policy (docs/design.md): a refused step returns a Status other than Ok and leaves
 // the filter exactly as it was: estimate, covariance, parameters (and MJUKF's θᵢ), diagnostics, and the sigma
 // points a following measurement update would use. The dual filter's parameter filter too: θ̂, P^θ,
-// its diagnostics, and the prior its UpdatedParameters ordering runs the time update again from.
+// its diagnostics, and the prior its UpdatedParameters ordering runs the time update again from. Every
+// filter in both covariance forms (covariance_form.hpp): the square-root form's refusals are the full
+// form's.
 
 #include <cmath>
 #include <limits>
@@ -18,10 +20,14 @@
 #include "mjukf/ukf.hpp"
 #include "paper/experiments.hpp"
 #include "robustness_support.hpp"
+#include "test_support.hpp"
 
 namespace {
 
 using mjukf::testing::IsDual;
+using mjukf::testing::IsJoint;
+using mjukf::testing::IsModifiedJoint;
+using mjukf::testing::SquareRoot;
 
 using mjukf::Status;
 constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
@@ -95,8 +101,7 @@ struct Snapshot {
         innovationCovarianceDiagonal(f.lastUpdate().innovationCovariance.diagonal()),
         nis(f.lastUpdate().nis),
         hasPropagatedPoints(f.hasPropagatedPoints()) {
-    if constexpr (std::is_same_v<Filter,
-                                 mjukf::ModifiedJointUkf<typename Filter::Model, typename Filter::Integrator>>) {
+    if constexpr (IsModifiedJoint<Filter>::value) {
       parameterPoints = f.parameterPoints();
       const auto& k = f.sensitivity();
       automaticState.resize(f.transformation().rows(), f.transformation().cols() + 1 + k.stateSensitivity().rows() +
@@ -139,7 +144,7 @@ struct Toy {
     s.initialCovariance.setIdentity();
     s.processNoise = q * decltype(s.processNoise)::Identity();
     s.measurementNoise.setConstant(Scalar(1e-3));
-    if constexpr (std::is_same_v<Filter, mjukf::ModifiedJointUkf<Model, Stepper>>) {
+    if constexpr (IsModifiedJoint<Filter>::value) {
       s.scaling = Scalar(-0.1);
       s.transformation.setOnes();
       s.parameterSpread.setConstant(Scalar(0.01));
@@ -162,19 +167,25 @@ struct Kind {
   template <class Stepper = mjukf::ITrBdf2<double>>
   using With = Toy<F, Stepper>;
 };
-template <mjukf::DualUkfOrdering Ordering>
+template <mjukf::DualUkfOrdering Ordering, template <class...> class F = mjukf::DualUkf>
 struct DualKind {
   template <class Stepper = mjukf::ITrBdf2<double>>
-  using With = Toy<mjukf::DualUkf, Stepper, Ordering>;
+  using With = Toy<F, Stepper, Ordering>;
 };
 // MJUKF with both automatic modes (T from the sensitivities, adaptive ξ).
+template <template <class...> class F = mjukf::ModifiedJointUkf>
 struct AutomaticMjukfKind {
   template <class Stepper = mjukf::ITrBdf2<double>>
-  using With = Toy<mjukf::ModifiedJointUkf, Stepper, mjukf::DualUkfOrdering::PriorParameters, ToyModel, true>;
+  using With = Toy<F, Stepper, mjukf::DualUkfOrdering::PriorParameters, ToyModel, true>;
 };
-using Kinds = ::testing::Types<Kind<mjukf::Ukf>, Kind<mjukf::JointUkf>, Kind<mjukf::ModifiedJointUkf>,
-                               AutomaticMjukfKind, DualKind<mjukf::DualUkfOrdering::PriorParameters>,
-                               DualKind<mjukf::DualUkfOrdering::UpdatedParameters>>;
+using Kinds = ::testing::Types<
+    Kind<mjukf::Ukf>, Kind<mjukf::JointUkf>, Kind<mjukf::ModifiedJointUkf>, AutomaticMjukfKind<>,
+    DualKind<mjukf::DualUkfOrdering::PriorParameters>, DualKind<mjukf::DualUkfOrdering::UpdatedParameters>,
+    // The square-root form.
+    Kind<SquareRoot<mjukf::Ukf>::Filter>, Kind<SquareRoot<mjukf::JointUkf>::Filter>,
+    Kind<SquareRoot<mjukf::ModifiedJointUkf>::Filter>, AutomaticMjukfKind<SquareRoot<mjukf::ModifiedJointUkf>::Filter>,
+    DualKind<mjukf::DualUkfOrdering::PriorParameters, SquareRoot<mjukf::DualUkf>::Filter>,
+    DualKind<mjukf::DualUkfOrdering::UpdatedParameters, SquareRoot<mjukf::DualUkf>::Filter>>;
 TYPED_TEST_SUITE(FailurePolicy, Kinds);
 
 // After a refused call, the next measurement update gives bit for bit what it gives on a filter that
@@ -270,7 +281,7 @@ TYPED_TEST(FailurePolicy, CovarianceWithoutCholeskyFactor) {
   // and the step is taken.
   const Snapshot<Filter> defaults(filter);
   const Status status = filter.timeUpdate(0.0, 0.01);
-  if constexpr (std::is_same_v<Filter, mjukf::JointUkf<ToyModel, CollapsingStepper>>) {
+  if constexpr (IsJoint<Filter>::value) {
     ASSERT_EQ(status, Status::Repaired);
     EXPECT_GT(filter.covariance()(0, 0), 0.0);
     EXPECT_LE(filter.covariance()(0, 0), 16 * 2.3e-16 * 1e4 * filter.covariance().diagonal().mean());
@@ -310,7 +321,7 @@ TYPED_TEST(FailurePolicy, MaskedUpdates) {
   EXPECT_TRUE(bitwiseSame(after.parameters, before.parameters));
   EXPECT_TRUE(bitwiseSame(after.parameterCovariance, before.parameterCovariance));
   EXPECT_FALSE(after.hasPropagatedPoints);  // an update was committed
-  if constexpr (std::is_same_v<decltype(filter), mjukf::ModifiedJointUkf<ToyModel, mjukf::ITrBdf2<double>>>) {
+  if constexpr (IsModifiedJoint<decltype(filter)>::value) {
     for (int i = 0; i < filter.parameterPoints().cols(); ++i)
       EXPECT_EQ(filter.parameterPoints()(0, i), filter.parameters()(0));
   }

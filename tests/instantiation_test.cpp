@@ -10,39 +10,46 @@
 
 namespace mjukf {
 
-#define MJUKF_INSTANTIATE_FOR(Scalar)                                                   \
-  template class MerweScaledSigmaPoints<Scalar, 1>;                                     \
-  template class MerweScaledSigmaPoints<Scalar, 6>;                                     \
-  template class detail::Estimate<Scalar, 4, 4>;                                        \
-  template class detail::Estimate<Scalar, 3, 2, Cubature>;                              \
-  template class CubatureSigmaPoints<Scalar, 3>;                                        \
-  template class Ukf<models::CoupledTank<Scalar>, Rk4<Scalar>, Cubature>;               \
-  template class JointUkf<models::FlexibleJoint<Scalar>, Rk4<Scalar>, Cubature>;        \
-  template class DualUkf<models::FlexibleJoint<Scalar>, ITrBdf2<Scalar>, Cubature>;     \
-  template class ITrBdf2<Scalar>;                                                       \
-  template class ExplicitTrBdf2<Scalar>;                                                \
-  template class Rk4<Scalar>;                                                           \
-  template class TrBdf2<Scalar>;                                                        \
-  template class JointUkf<models::FlexibleJoint<Scalar>, Rk4<Scalar>>;                  \
-  template class ModifiedJointUkf<models::CoupledTank<Scalar>, ExplicitTrBdf2<Scalar>>; \
-  template class Ukf<models::FlexibleJoint<Scalar>, TrBdf2<Scalar>>;                    \
-  template struct models::CoupledTank<Scalar>;                                          \
-  template struct models::FlexibleJoint<Scalar>;                                        \
-  template class Ukf<models::CoupledTank<Scalar>>;                                      \
-  template class Ukf<models::FlexibleJoint<Scalar>>;                                    \
-  template class JointUkf<models::CoupledTank<Scalar>>;                                 \
-  template class JointUkf<models::FlexibleJoint<Scalar>>;                               \
-  template class ModifiedJointUkf<models::CoupledTank<Scalar>>;                         \
-  template class ModifiedJointUkf<models::FlexibleJoint<Scalar>>;                       \
-  template class DualUkf<models::CoupledTank<Scalar>>;                                  \
-  template class DualUkf<models::FlexibleJoint<Scalar>>;                                \
-  template struct DualUkfSettings<Scalar, 4, 2, 4>;                                     \
-  template struct UkfSettings<Scalar, 4, 4>;                                            \
-  template struct JointUkfSettings<Scalar, 4, 2, 4>;                                    \
-  template struct ModifiedJointUkfSettings<Scalar, 4, 2, 4>;                            \
-  template struct UpdateDiagnostics<Scalar, 4>;                                         \
-  template class paper::RmseAccumulator<Scalar, 2>;                                     \
-  template struct paper::CoupledTankExperiment<Scalar>;                                 \
+#define MJUKF_INSTANTIATE_FOR(Scalar)                                                                                 \
+  template class MerweScaledSigmaPoints<Scalar, 1>;                                                                   \
+  template class MerweScaledSigmaPoints<Scalar, 6>;                                                                   \
+  template class detail::Estimate<Scalar, 4, 4>;                                                                      \
+  template class detail::Estimate<Scalar, 3, 2, Cubature>;                                                            \
+  template class detail::Estimate<Scalar, 4, 4, MerweScaled, SquareRootCovariance>;                                   \
+  template class detail::Estimate<Scalar, 1, 2, Cubature, SquareRootCovariance>;                                      \
+  template class Ukf<models::CoupledTank<Scalar>, ITrBdf2<Scalar>, MerweScaled, SquareRootCovariance>;                \
+  template class JointUkf<models::FlexibleJoint<Scalar>, ITrBdf2<Scalar>, MerweScaled, SquareRootCovariance>;         \
+  template class ModifiedJointUkf<models::FlexibleJoint<Scalar>, ITrBdf2<Scalar>, MerweScaled, SquareRootCovariance>; \
+  template class DualUkf<models::CoupledTank<Scalar>, ITrBdf2<Scalar>, MerweScaled, SquareRootCovariance>;            \
+  template class JointUkf<models::CoupledTank<Scalar>, Rk4<Scalar>, Cubature, SquareRootCovariance>;                  \
+  template class CubatureSigmaPoints<Scalar, 3>;                                                                      \
+  template class Ukf<models::CoupledTank<Scalar>, Rk4<Scalar>, Cubature>;                                             \
+  template class JointUkf<models::FlexibleJoint<Scalar>, Rk4<Scalar>, Cubature>;                                      \
+  template class DualUkf<models::FlexibleJoint<Scalar>, ITrBdf2<Scalar>, Cubature>;                                   \
+  template class ITrBdf2<Scalar>;                                                                                     \
+  template class ExplicitTrBdf2<Scalar>;                                                                              \
+  template class Rk4<Scalar>;                                                                                         \
+  template class TrBdf2<Scalar>;                                                                                      \
+  template class JointUkf<models::FlexibleJoint<Scalar>, Rk4<Scalar>>;                                                \
+  template class ModifiedJointUkf<models::CoupledTank<Scalar>, ExplicitTrBdf2<Scalar>>;                               \
+  template class Ukf<models::FlexibleJoint<Scalar>, TrBdf2<Scalar>>;                                                  \
+  template struct models::CoupledTank<Scalar>;                                                                        \
+  template struct models::FlexibleJoint<Scalar>;                                                                      \
+  template class Ukf<models::CoupledTank<Scalar>>;                                                                    \
+  template class Ukf<models::FlexibleJoint<Scalar>>;                                                                  \
+  template class JointUkf<models::CoupledTank<Scalar>>;                                                               \
+  template class JointUkf<models::FlexibleJoint<Scalar>>;                                                             \
+  template class ModifiedJointUkf<models::CoupledTank<Scalar>>;                                                       \
+  template class ModifiedJointUkf<models::FlexibleJoint<Scalar>>;                                                     \
+  template class DualUkf<models::CoupledTank<Scalar>>;                                                                \
+  template class DualUkf<models::FlexibleJoint<Scalar>>;                                                              \
+  template struct DualUkfSettings<Scalar, 4, 2, 4>;                                                                   \
+  template struct UkfSettings<Scalar, 4, 4>;                                                                          \
+  template struct JointUkfSettings<Scalar, 4, 2, 4>;                                                                  \
+  template struct ModifiedJointUkfSettings<Scalar, 4, 2, 4>;                                                          \
+  template struct UpdateDiagnostics<Scalar, 4>;                                                                       \
+  template class paper::RmseAccumulator<Scalar, 2>;                                                                   \
+  template struct paper::CoupledTankExperiment<Scalar>;                                                               \
   template struct paper::FlexibleJointExperiment<Scalar>;
 
 MJUKF_INSTANTIATE_FOR(float)

@@ -67,18 +67,20 @@ template <template <class...> class F, class E>
 struct Case : mjukf::testing::PaperFilter<F, E> {};
 
 // The dual filter with the experiment's dualUkf() settings, in the given ordering.
-template <class E, mjukf::DualUkfOrdering Ordering>
+template <class E, mjukf::DualUkfOrdering Ordering, template <class...> class F = mjukf::DualUkf>
 struct DualCase {
   using Model = typename E::Model;
-  static mjukf::DualUkf<Model> make() {
+  static F<Model> make() {
     auto s = E::dualUkf();
     s.ordering = Ordering;
-    return mjukf::DualUkf<Model>(Model(), E::initialState(), E::initialParameters(), s);
+    return F<Model>(Model(), E::initialState(), E::initialParameters(), s);
   }
 };
 
 using mjukf::testing::DiscreteRobot;  // the robot as a discrete-time model: no integrator
 using mjukf::testing::IsDual;
+using mjukf::testing::IsUkf;
+using mjukf::testing::SquareRoot;
 static_assert(mjukf::isDiscreteTime<DiscreteRobot<double>>);
 
 // Each filter over DiscreteRobot with the robot's settings for it (the settings' shared part is the same
@@ -92,9 +94,7 @@ struct DiscreteCase {
   static Filter make() {
     auto s = mjukf::testing::presetSettings<F, E, Model>();
     if constexpr (IsDual<Filter>::value) s.ordering = Ordering;
-    const auto theta0 = std::is_same_v<Filter, mjukf::Ukf<Model, mjukf::NoIntegrator<Scalar>>>
-                            ? E::Model::trueParameters()
-                            : E::initialParameters();
+    const auto theta0 = IsUkf<Filter>::value ? E::Model::trueParameters() : E::initialParameters();
     return Filter(Model(), E::initialState(), theta0, s);
   }
 };
@@ -107,6 +107,18 @@ struct Automatic {
     auto s = paper.settings();
     s.automaticTransformation = true;
     s.adaptiveScaling = true;
+    return std::decay_t<decltype(paper)>(paper.model(), paper.state(), paper.parameters(), s);
+  }
+};
+
+// `Base` with α = 0.5 (β = 2, κ = 0): the centre point's covariance weight is negative (Wc₀ = −0.25 for
+// L = 6), which the square-root form applies as a rank-one downdate.
+template <class Base>
+struct AlphaBelowOne {
+  static auto make() {
+    const auto paper = Base::make();
+    auto s = paper.settings();
+    s.sigmaPoints.alpha = 0.5;
     return std::decay_t<decltype(paper)>(paper.model(), paper.state(), paper.parameters(), s);
   }
 };
@@ -140,7 +152,15 @@ using Cases = ::testing::Types<
     Automatic<Case<mjukf::ModifiedJointUkf, Robot>>, Automatic<Case<mjukf::ModifiedJointUkf, Tank>>,
     Automatic<Case<mjukf::ModifiedJointUkf, RobotF>>, Automatic<DiscreteCase<mjukf::ModifiedJointUkf, double>>,
     Automatic<DiscreteCase<mjukf::ModifiedJointUkf, float>>, Automatic<Case2019<mjukf::ModifiedJointUkf, VanDerPol>>,
-    Automatic<Case2019<mjukf::ModifiedJointUkf, Lorenz>>>;
+    Automatic<Case2019<mjukf::ModifiedJointUkf, Lorenz>>,
+    // The square-root form (covariance_form.hpp).
+    Case<SquareRoot<mjukf::Ukf>::Filter, Robot>, Case<SquareRoot<mjukf::JointUkf>::Filter, Robot>,
+    Case<SquareRoot<mjukf::ModifiedJointUkf>::Filter, Tank>, Case<SquareRoot<mjukf::JointUkf>::Filter, RobotF>,
+    DualCase<Robot, kPrior, SquareRoot<mjukf::DualUkf>::Filter>,
+    DualCase<Robot, kUpdated, SquareRoot<mjukf::DualUkf>::Filter>,
+    DiscreteCase<SquareRoot<mjukf::DualUkf>::Filter, float, kUpdated>,
+    Automatic<Case<SquareRoot<mjukf::ModifiedJointUkf>::Filter, Robot>>,
+    AlphaBelowOne<Case<SquareRoot<mjukf::JointUkf>::Filter, Robot>>, AlphaBelowOne<Case<mjukf::JointUkf, Robot>>>;
 TYPED_TEST_SUITE(NoAllocation, Cases);
 
 TYPED_TEST(NoAllocation, EveryPerStepCall) {
@@ -196,8 +216,7 @@ TYPED_TEST(NoAllocation, MaskingGatingBoundsAndRepair) {
   using Scalar = typename Filter::Scalar;
   using Meas = typename Filter::Meas;
   auto settings = paper.settings();
-  if constexpr (Filter::ParamDim > 0 &&
-                !std::is_same_v<Filter, mjukf::Ukf<typename Filter::Model, typename Filter::Integrator>>) {
+  if constexpr (Filter::ParamDim > 0 && !IsUkf<Filter>::value) {
     settings.parameterBounds.lower = paper.parameters() - Filter::Param::Constant(Scalar(1));
     settings.parameterBounds.upper = paper.parameters() + Filter::Param::Constant(Scalar(1));
   }

@@ -1,8 +1,9 @@
 // The firmware example (docs/embedded.md): the flexible-joint robot's filters in float on a Cortex-M4F,
 // on measurements the program makes itself, with the paper's schedule, and the figures of the target.
 //
-// For each filter built in (EMBEDDED_FILTERS, a bit per filter; 0 builds the plant simulation alone,
-// the baseline the flash figures subtract), the program
+// For each filter built in (EMBEDDED_FILTERS, a bit per filter, the four in the full and in the
+// square-root covariance form; 0 builds the plant simulation alone, the baseline the flash figures
+// subtract), the program
 //   1. asks the factory for a filter with a broken R and checks that it names the setting (the
 //      exception-free validation path, on the target);
 //   2. builds the filter with the robot's settings (examples/support/paper/experiments.hpp) by create();
@@ -28,7 +29,8 @@
 #include "platform.hpp"
 
 #ifndef EMBEDDED_FILTERS
-#define EMBEDDED_FILTERS 15  // 1 UKF, 2 JUKF, 4 MJUKF, 8 dual UKF
+// 1 UKF, 2 JUKF, 4 MJUKF, 8 dual UKF; 16, 32, 64, 128 the same four in the square-root covariance form
+#define EMBEDDED_FILTERS 255
 #endif
 
 namespace {
@@ -262,6 +264,20 @@ bool runAll() {
                                                             Experiment::modifiedJointUkf());
   if constexpr ((EMBEDDED_FILTERS & 8) != 0)
     ok &= runFilter<Scalar, mjukf::DualUkf<Model>>("dual", Experiment::initialParameters(), Experiment::dualUkf());
+  using Stepper = mjukf::DefaultIntegrator<Model>;
+  using mjukf::MerweScaled, mjukf::SquareRootCovariance;
+  if constexpr ((EMBEDDED_FILTERS & 16) != 0)
+    ok &= runFilter<Scalar, mjukf::Ukf<Model, Stepper, MerweScaled, SquareRootCovariance>>(
+        "ukf_sr", Model::trueParameters(), Experiment::ukf());
+  if constexpr ((EMBEDDED_FILTERS & 32) != 0)
+    ok &= runFilter<Scalar, mjukf::JointUkf<Model, Stepper, MerweScaled, SquareRootCovariance>>(
+        "jukf_sr", Experiment::initialParameters(), Experiment::jointUkf());
+  if constexpr ((EMBEDDED_FILTERS & 64) != 0)
+    ok &= runFilter<Scalar, mjukf::ModifiedJointUkf<Model, Stepper, MerweScaled, SquareRootCovariance>>(
+        "mjukf_sr", Experiment::initialParameters(), Experiment::modifiedJointUkf());
+  if constexpr ((EMBEDDED_FILTERS & 128) != 0)
+    ok &= runFilter<Scalar, mjukf::DualUkf<Model, Stepper, MerweScaled, SquareRootCovariance>>(
+        "dual_sr", Experiment::initialParameters(), Experiment::dualUkf());
   if constexpr (EMBEDDED_FILTERS == 0) {  // the baseline: the plant and the output alone
     Plant<Scalar> plant;
     Line line;

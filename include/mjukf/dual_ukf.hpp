@@ -75,12 +75,13 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
   using typename Base::Scalar, typename Base::State, typename Base::Param, typename Base::Meas, typename Base::Input;
   using typename Base::Vector, typename Base::Points, typename Base::MeasPoints, typename Base::Mask;
   /// The parameter filter: an estimate of θ measured through the m components of y, with the state
-  /// filter's sigma-point set.
-  using ParameterEstimate = Estimate<Scalar, ParamDim, MeasDim, typename Est::PointSetType>;
+  /// filter's sigma-point set and covariance form.
+  using ParameterEstimate = Estimate<Scalar, ParamDim, MeasDim, typename Est::PointSetType, typename Est::FormType>;
   static constexpr int ParameterCount = ParameterEstimate::Count;
 
   DualParameters(const Settings& s, const Param& initialParameters)
-      : estimate_(Validated{}, s.parameterSigmaPoints),
+      : estimate_(Validated{}, s.parameterSigmaPoints, s.parameterProcessNoise,
+                  s.measurementNoise + s.parameterObservationNoise),
         observationNoise_(s.measurementNoise + s.parameterObservationNoise),
         boundsActive_(s.parameterBounds.active()),
         storesStep_(s.ordering == DualUkfOrdering::UpdatedParameters) {
@@ -94,14 +95,14 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
     hasPrior_ = false;
   }
 
-  // The parameter time update, θ̂⁻ = θ̂, P^θ⁻ = P^θ / λ + Q_θ, and the propagation of x̂_{k−1} with each
-  // θⱼ of (θ̂⁻, P^θ⁻) over the step, into the candidates.
+  // The parameter time update, θ̂⁻ = θ̂, P^θ⁻ = P^θ / λ + Q_θ (square-root form: S^θ⁻ from
+  // [S^θ / √λ | G_θ] by Householder), and the propagation of x̂_{k−1} with each θⱼ of (θ̂⁻, P^θ⁻) over
+  // the step, into the candidates.
   template <class Step>
   Status predictParameters(const Step& step, const Est& state) {
     const Settings& s = step.settings;
     ParameterEstimate& pe = estimate_;
-    pe.candidateMean() = pe.mean();
-    pe.candidateCovariance() = pe.covariance() / s.parameterForgetting + s.parameterProcessNoise;
+    pe.predictRandomWalk(s.parameterForgetting, s.parameterProcessNoise);
     const Status settled = pe.settle(s.repair);
     if (!taken(settled)) return settled;
     if (const Status drawn = pe.draw(pe.candidateMean(), pe.candidateFactor()); drawn != Status::Ok) return drawn;
@@ -151,8 +152,11 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
       if (taken(state)) {
         auto& est = engine.estimate_;
         if (engine.settings().redrawPointsForUpdate) est.draw(repredictedMean_, est.candidateFactor());
-        const Status corrected =
-            engine.correctAndCommit(est.workPoints(), repredictedMean_, repredictedCovariance_, y, present);
+        // The points of the prediction again (or drawn from it), and its factor: the square-root form's
+        // correction reads it before it writes its own candidate factor.
+        const typename Est::Prior prior{repredictedMean_, repredictedCovariance_, est.candidateFactor(),
+                                        est.workPointsPrior()};
+        const Status corrected = engine.correctAndCommit(est.workPoints(), prior, y, present);
         state = taken(corrected) ? combineTaken(corrected, state) : corrected;
       }
       useCorrectedParameters_ = false;
@@ -214,7 +218,7 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
     for (int j = 0; j < ParameterCount; ++j)  // Dⱼ = g(Φ_h(x̂_{k−1}; θⱼ), θⱼ)
       pe.measuredPoints().col(j) = model.measurement(drawn ? state : State(propagatedStates_.col(j)), thetas.col(j));
     if (const Status st =
-            pe.correct(thetas, pe.measuredPoints(), pe.mean(), pe.covariance(), y, observationNoise_, present, noGate_);
+            pe.correct(thetas, pe.measuredPoints(), pe.prior(drawn), y, observationNoise_, present, noGate_);
         st != Status::Ok)
       return st;
     if (!allFinite(pe.candidateMean())) return Status::NonFiniteResult;
@@ -292,13 +296,14 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
 /// each correction. Every matrix is sized at compile time and no per-step call allocates; a call that
 /// returns a Status other than Ok or Repaired leaves the filter exactly as it was.
 ///
-/// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
-/// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
-template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled>
+/// Template arguments: docs/design.md, "Template arguments of every filter"; the parameter filter has
+/// the state filter's sigma-point set and covariance form.
+template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled,
+          class Form = FullCovariance>
 class DualUkf : public detail::EngineOf<
-                    DualUkf<Model_, Integrator_, PointSet>, Model_, Integrator_,
+                    DualUkf<Model_, Integrator_, PointSet, Form>, Model_, Integrator_,
                     DualUkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::ParamDim, Model_::MeasDim>,
-                    detail::DualParameters, Model_::StateDim, PointSet> {
+                    detail::DualParameters, Model_::StateDim, PointSet, Form> {
   static_assert(checkModel<Model_, 1>());
   using Engine = typename DualUkf::UnscentedEngine;
   using Policy = typename Engine::PolicyType;

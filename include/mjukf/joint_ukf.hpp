@@ -87,6 +87,10 @@ class AugmentedParameters : public ParameterPolicy<Model, Integrator, Settings, 
 }  // namespace detail
 /// \endcond
 
+/// The settings of `JointUkf<Model>`.
+template <class Model>
+using JointUkfSettingsFor = JointUkfSettings<typename Model::Scalar, Model::StateDim, Model::ParamDim, Model::MeasDim>;
+
 /// Joint unscented Kalman filter: estimates z = [x; θ] with L = n + p, the parameters constant in the
 /// model (θ̇ = 0). A time update costs 2(n + p) + 1 model propagations.
 ///
@@ -95,13 +99,13 @@ class AugmentedParameters : public ParameterPolicy<Model, Integrator, Settings, 
 /// of the shared engine, detail/unscented_engine.hpp; with parameter bounds, the θ block of every
 /// committed mean is clamped (parameter_bounds.hpp).
 ///
-/// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
-/// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
-template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled>
-class JointUkf : public detail::EngineOf<
-                     JointUkf<Model_, Integrator_, PointSet>, Model_, Integrator_,
-                     JointUkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::ParamDim, Model_::MeasDim>,
-                     detail::AugmentedParameters, Model_::StateDim + Model_::ParamDim, PointSet> {
+/// Template arguments (model, stepper, sigma-point set, covariance form): docs/design.md, "Template
+/// arguments of every filter".
+template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled,
+          class Form = FullCovariance>
+class JointUkf : public detail::EngineOf<JointUkf<Model_, Integrator_, PointSet, Form>, Model_, Integrator_,
+                                         JointUkfSettingsFor<Model_>, detail::AugmentedParameters,
+                                         Model_::StateDim + Model_::ParamDim, PointSet, Form> {
   static_assert(checkModel<Model_, 1>());
   using Engine = typename JointUkf::UnscentedEngine;
   friend Engine;
@@ -173,9 +177,5 @@ class JointUkf : public detail::EngineOf<
     return z;
   }
 };
-
-/// The settings of `JointUkf<Model>`.
-template <class Model>
-using JointUkfSettingsFor = JointUkfSettings<typename Model::Scalar, Model::StateDim, Model::ParamDim, Model::MeasDim>;
 
 }  // namespace mjukf

@@ -5,6 +5,7 @@
 /// concepts they rest on. Not included: the example plants (`mjukf/models/<plant>.hpp`, each included
 /// on its own) and the SUNDIALS adapter (`mjukf/sundials/cvode.hpp`, which needs SUNDIALS).
 
+#include "mjukf/covariance_form.hpp"
 #include "mjukf/covariance_repair.hpp"
 #include "mjukf/diagnostics.hpp"
 #include "mjukf/dual_ukf.hpp"

@@ -261,14 +261,15 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
 /// set T and one ξ per parameter from the sensitivities instead, for p more propagations per time
 /// update (parameter_sensitivity.hpp, docs/tuning-mjukf.md).
 ///
-/// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
-/// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
-template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled>
+/// Template arguments: docs/design.md, "Template arguments of every filter"; the sigma-point set must
+/// have 2n + 1 points. Eqs. 9–10 touch no covariance, so they are the same in both covariance forms.
+template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled,
+          class Form = FullCovariance>
 class ModifiedJointUkf
     : public detail::EngineOf<
-          ModifiedJointUkf<Model_, Integrator_, PointSet>, Model_, Integrator_,
+          ModifiedJointUkf<Model_, Integrator_, PointSet, Form>, Model_, Integrator_,
           ModifiedJointUkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::ParamDim, Model_::MeasDim>,
-          detail::ModifiedJointParameters, Model_::StateDim, PointSet> {
+          detail::ModifiedJointParameters, Model_::StateDim, PointSet, Form> {
   static_assert(checkModel<Model_, 1>());
   using Engine = typename ModifiedJointUkf::UnscentedEngine;
   friend Engine;

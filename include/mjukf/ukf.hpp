@@ -79,12 +79,12 @@ class KnownParameters : public ParameterPolicy<Model, Integrator, Settings, Est>
 /// was. The per-step calls (`timeUpdate`, `propagateMean`, `measurementUpdate`) are those of the shared
 /// engine, detail/unscented_engine.hpp.
 ///
-/// The stepper `Integrator_` of a continuous model is by default the paper's I-TR-BDF2, which is first
-/// order: at a coarse step choose `Rk4` on purpose (docs/getting-started.md §4 measures the difference).
-template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled>
-class Ukf : public detail::EngineOf<Ukf<Model_, Integrator_, PointSet>, Model_, Integrator_,
+/// Template arguments: docs/design.md, "Template arguments of every filter".
+template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled,
+          class Form = FullCovariance>
+class Ukf : public detail::EngineOf<Ukf<Model_, Integrator_, PointSet, Form>, Model_, Integrator_,
                                     UkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::MeasDim>,
-                                    detail::KnownParameters, Model_::StateDim, PointSet> {
+                                    detail::KnownParameters, Model_::StateDim, PointSet, Form> {
   static_assert(checkModel<Model_>());
   using Engine = typename Ukf::UnscentedEngine;
   friend Engine;

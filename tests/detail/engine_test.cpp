@@ -2,11 +2,14 @@
 // unscented prediction and correction are exactly the Kalman filter's (sigma points carry the first two
 // moments through a linear map without error), masking equals the update of the reduced model, the gate
 // refuses, and only a commit changes the estimate. The filters' tests check the same through the
-// public API; these check the arithmetic where it is written. Tolerances: rounding of sums of 2L + 1
-// terms of size ‖P‖, a few hundred ε.
+// public API; these check the arithmetic where it is written, in both covariance forms (the square-root
+// form's prediction and correction are Householder factors and downdates, not sums: the same Kalman
+// answer). Tolerances: rounding of sums of 2L + 1 terms of size ‖P‖, a few hundred ε.
 
 #include <limits>
 #include <random>
+#include <string>
+#include <type_traits>
 
 #include <Eigen/LU>
 #include <gtest/gtest.h>
@@ -17,7 +20,6 @@
 namespace {
 
 using mjukf::Status;
-using Est = mjukf::detail::Estimate<double, 3, 2>;
 constexpr double kTolerance = 1e-12;
 
 struct LinearCase {
@@ -32,21 +34,36 @@ struct LinearCase {
   mjukf::MeasurementGate<double, 2> noGate;
 };
 
-Est makeEstimate(const LinearCase& c) {
-  Est e(mjukf::detail::Validated{}, mjukf::SigmaPointParameters<double>{0.7, 2.0, 1.0});
-  EXPECT_TRUE(e.assign(c.x, c.P));
-  return e;
-}
+template <class Form>
+class EngineEstimate : public ::testing::Test {
+ protected:
+  using Est = mjukf::detail::Estimate<double, 3, 2, mjukf::MerweScaled, Form>;
+  static Est makeEstimate(const LinearCase& c) {
+    Est e(mjukf::detail::Validated{}, mjukf::SigmaPointParameters<double>{0.7, 2.0, 1.0}, c.Q, c.R);
+    EXPECT_TRUE(e.assign(c.x, c.P));
+    return e;
+  }
+};
+using Forms = ::testing::Types<mjukf::FullCovariance, mjukf::SquareRootCovariance>;
+struct FormName {
+  template <class Form>
+  static std::string GetName(int) {
+    return std::is_same_v<Form, mjukf::FullCovariance> ? "Full" : "SquareRoot";
+  }
+};
+TYPED_TEST_SUITE(EngineEstimate, Forms, FormName);
 
-TEST(EngineEstimate, PredictionOfALinearMapIsTheKalmanPrediction) {
+TYPED_TEST(EngineEstimate, PredictionOfALinearMapIsTheKalmanPrediction) {
   LinearCase c;
-  Est e = makeEstimate(c);
+  using Est = typename TestFixture::Est;
+  Est e = TestFixture::makeEstimate(c);
   ASSERT_EQ(e.draw(e.mean(), e.factor()), Status::Ok);
   for (int i = 0; i < Est::Count; ++i) e.workPoints().col(i) = c.F * e.workPoints().col(i);
   e.predict(c.Q);
   EXPECT_LT((e.candidateMean() - c.F * c.x).cwiseAbs().maxCoeff(), kTolerance);
-  EXPECT_LT((e.candidateCovariance() - (c.F * c.P * c.F.transpose() + c.Q)).cwiseAbs().maxCoeff(), kTolerance);
+  // settle() checks the candidate (and the square-root form forms P = S Sᵀ from its factor there).
   ASSERT_EQ(e.settle(mjukf::CovarianceRepair<double>{}), Status::Ok);
+  EXPECT_LT((e.candidateCovariance() - (c.F * c.P * c.F.transpose() + c.Q)).cwiseAbs().maxCoeff(), kTolerance);
   EXPECT_LT((e.candidateFactor() * e.candidateFactor().transpose() - e.candidateCovariance()).cwiseAbs().maxCoeff(),
             kTolerance);
   // Nothing is the estimate's until it is committed.
@@ -57,63 +74,66 @@ TEST(EngineEstimate, PredictionOfALinearMapIsTheKalmanPrediction) {
   EXPECT_TRUE(e.hasPoints());
 }
 
-TEST(EngineEstimate, CorrectionOfALinearMeasurementIsTheKalmanUpdate) {
+TYPED_TEST(EngineEstimate, CorrectionOfALinearMeasurementIsTheKalmanUpdate) {
   LinearCase c;
-  Est e = makeEstimate(c);
+  using Est = typename TestFixture::Est;
+  Est e = TestFixture::makeEstimate(c);
   ASSERT_EQ(e.draw(e.mean(), e.factor()), Status::Ok);
   for (int i = 0; i < Est::Count; ++i) e.measuredPoints().col(i) = c.C * e.workPoints().col(i);
-  ASSERT_EQ(e.correct(e.workPoints(), e.measuredPoints(), e.mean(), e.covariance(), c.y, c.R, nullptr, c.noGate),
-            Status::Ok);
+  ASSERT_EQ(e.correct(e.workPoints(), e.measuredPoints(), e.prior(true), c.y, c.R, nullptr, c.noGate), Status::Ok);
   const Eigen::Matrix2d S = c.C * c.P * c.C.transpose() + c.R;
   const Eigen::Matrix<double, 3, 2> K = c.P * c.C.transpose() * S.inverse();
   const Eigen::Vector2d innovation = c.y - c.C * c.x;
   EXPECT_LT((e.candidateMean() - (c.x + K * innovation)).cwiseAbs().maxCoeff(), kTolerance);
-  EXPECT_LT((e.candidateCovariance() - (c.P - K * S * K.transpose())).cwiseAbs().maxCoeff(), kTolerance);
   // The gain's factors: K = U S⁻¹ with S the lower factor of P_yy.
   const Eigen::Matrix2d s = e.innovationFactor();
   EXPECT_LT((s * s.transpose() - S).cwiseAbs().maxCoeff(), kTolerance);
   EXPECT_LT((e.gainFactor() * s.inverse() - K).cwiseAbs().maxCoeff(), kTolerance);
   ASSERT_EQ(e.settle(mjukf::CovarianceRepair<double>{}), Status::Ok);
+  EXPECT_LT((e.candidateCovariance() - (c.P - K * S * K.transpose())).cwiseAbs().maxCoeff(), kTolerance);
   e.commitCorrection();
   EXPECT_NEAR(e.diagnostics().nis, innovation.dot(S.inverse() * innovation), kTolerance);
   EXPECT_LT((e.diagnostics().innovationCovariance - S).cwiseAbs().maxCoeff(), kTolerance);
 }
 
-TEST(EngineEstimate, AMaskedCorrectionIsTheUpdateOfTheReducedModel) {
+TYPED_TEST(EngineEstimate, AMaskedCorrectionIsTheUpdateOfTheReducedModel) {
   LinearCase c;
-  Est e = makeEstimate(c);
+  using Est = typename TestFixture::Est;
+  Est e = TestFixture::makeEstimate(c);
   ASSERT_EQ(e.draw(e.mean(), e.factor()), Status::Ok);
   for (int i = 0; i < Est::Count; ++i) e.measuredPoints().col(i) = c.C * e.workPoints().col(i);
   Eigen::Vector2d y = c.y;
   y(1) = std::numeric_limits<double>::quiet_NaN();  // missing: never read
   const Eigen::Matrix<bool, 2, 1> present(true, false);
-  ASSERT_EQ(e.correct(e.workPoints(), e.measuredPoints(), e.mean(), e.covariance(), y, c.R, &present, c.noGate),
-            Status::Ok);
+  ASSERT_EQ(e.correct(e.workPoints(), e.measuredPoints(), e.prior(true), y, c.R, &present, c.noGate), Status::Ok);
   const Eigen::RowVector3d c0 = c.C.row(0);
   const double s = c0 * c.P * c0.transpose() + c.R(0, 0);
   const Eigen::Vector3d k = c.P * c0.transpose() / s;
   EXPECT_LT((e.candidateMean() - (c.x + k * (c.y(0) - c0 * c.x))).cwiseAbs().maxCoeff(), kTolerance);
+  ASSERT_EQ(e.settle(mjukf::CovarianceRepair<double>{}), Status::Ok);
   EXPECT_LT((e.candidateCovariance() - (c.P - k * s * k.transpose())).cwiseAbs().maxCoeff(), kTolerance);
 }
 
-TEST(EngineEstimate, TheGateRefusesAnOutlierAndANonFiniteImageIsRefused) {
+TYPED_TEST(EngineEstimate, TheGateRefusesAnOutlierAndANonFiniteImageIsRefused) {
   LinearCase c;
-  Est e = makeEstimate(c);
+  using Est = typename TestFixture::Est;
+  Est e = TestFixture::makeEstimate(c);
   ASSERT_EQ(e.draw(e.mean(), e.factor()), Status::Ok);
   for (int i = 0; i < Est::Count; ++i) e.measuredPoints().col(i) = c.C * e.workPoints().col(i);
   const auto gate = mjukf::MeasurementGate<double, 2>::chiSquare(0.999);
   const Eigen::Vector2d outlier = c.C * c.x + Eigen::Vector2d(50.0, -50.0);
-  EXPECT_EQ(e.correct(e.workPoints(), e.measuredPoints(), e.mean(), e.covariance(), outlier, c.R, nullptr, gate),
+  EXPECT_EQ(e.correct(e.workPoints(), e.measuredPoints(), e.prior(true), outlier, c.R, nullptr, gate),
             Status::MeasurementRejected);
   e.measuredPoints()(1, 3) = std::numeric_limits<double>::infinity();
-  EXPECT_EQ(e.correct(e.workPoints(), e.measuredPoints(), e.mean(), e.covariance(), c.y, c.R, nullptr, c.noGate),
+  EXPECT_EQ(e.correct(e.workPoints(), e.measuredPoints(), e.prior(true), c.y, c.R, nullptr, c.noGate),
             Status::NonFiniteResult);
   EXPECT_EQ(e.mean(), c.x);  // nothing committed
 }
 
-TEST(EngineEstimate, AssignRefusesWhatHasNoFactorAndChangesNothing) {
+TYPED_TEST(EngineEstimate, AssignRefusesWhatHasNoFactorAndChangesNothing) {
   LinearCase c;
-  Est e = makeEstimate(c);
+  using Est = typename TestFixture::Est;
+  Est e = TestFixture::makeEstimate(c);
   const Eigen::Matrix3d before = e.covariance();
   EXPECT_FALSE(e.assign(Eigen::Vector3d::Zero(), Eigen::Matrix3d::Constant(1.0)));
   EXPECT_FALSE(e.assign(Eigen::Vector3d::Constant(NAN), Eigen::Matrix3d::Identity()));

@@ -29,14 +29,23 @@ bool bitwiseSame(const A& a, const B& b) {
   return a.size() == 0 || std::memcmp(a.data(), b.data(), sizeof(Scalar) * std::size_t(a.size())) == 0;
 }
 
+// Which filter a type is, whatever its stepper, sigma-point set and covariance form.
 template <class T>
 struct IsModifiedJoint : std::false_type {};
-template <class M, class I>
-struct IsModifiedJoint<ModifiedJointUkf<M, I>> : std::true_type {};
+template <class M, class I, class P, class F>
+struct IsModifiedJoint<ModifiedJointUkf<M, I, P, F>> : std::true_type {};
 template <class T>
 struct IsDual : std::false_type {};
-template <class M, class I>
-struct IsDual<DualUkf<M, I>> : std::true_type {};
+template <class M, class I, class P, class F>
+struct IsDual<DualUkf<M, I, P, F>> : std::true_type {};
+template <class T>
+struct IsJoint : std::false_type {};
+template <class M, class I, class P, class F>
+struct IsJoint<JointUkf<M, I, P, F>> : std::true_type {};
+template <class T>
+struct IsUkf : std::false_type {};
+template <class M, class I, class P, class F>
+struct IsUkf<Ukf<M, I, P, F>> : std::true_type {};
 
 /// Success when everything a caller can observe of the two filters is bit for bit the same, NaN
 /// included; otherwise a failure naming what differs. The filters may be of different types with the

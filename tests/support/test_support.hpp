@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 
+#include "mjukf/covariance_form.hpp"
 #include "mjukf/dual_ukf.hpp"
 #include "mjukf/filter_settings.hpp"
 #include "mjukf/integrators/i_tr_bdf2.hpp"
@@ -103,16 +104,43 @@ struct DiscreteRobot {
   Meas measurement(const State& x, const Param& theta) const { return robot.measurement(x, theta); }
 };
 
+/// Filter template F (Ukf, JointUkf, ModifiedJointUkf, DualUkf, or one of them as SquareRoot<F>::Filter)
+/// given model and stepper: which of the four it is, whatever its sigma-point set and covariance form.
+enum class Family { Ukf, Joint, ModifiedJoint, Dual };
+template <class T>
+struct FamilyOf;
+template <class M, class I, class P, class F>
+struct FamilyOf<Ukf<M, I, P, F>> : std::integral_constant<Family, Family::Ukf> {};
+template <class M, class I, class P, class F>
+struct FamilyOf<JointUkf<M, I, P, F>> : std::integral_constant<Family, Family::Joint> {};
+template <class M, class I, class P, class F>
+struct FamilyOf<ModifiedJointUkf<M, I, P, F>> : std::integral_constant<Family, Family::ModifiedJoint> {};
+template <class M, class I, class P, class F>
+struct FamilyOf<DualUkf<M, I, P, F>> : std::integral_constant<Family, Family::Dual> {};
+/// The family of filter template F (the type F<Model, int> is named, never instantiated).
+template <template <class...> class F, class Model>
+inline constexpr Family familyOf = FamilyOf<F<Model, int>>::value;
+
+/// Filter template F in the square-root covariance form (covariance_form.hpp), with the default
+/// sigma-point set: `SquareRoot<Ukf>::Filter<Model, Integrator>`, a template of (model, stepper) like
+/// the filters themselves, for the typed suites.
+template <template <class...> class F>
+struct SquareRoot {
+  template <class Model, class Integrator = DefaultIntegrator<Model>>
+  using Filter = F<Model, Integrator, MerweScaled, SquareRootCovariance>;
+};
+
 /// The preset of the paper's `Experiment` for filter template F (the UKF's, JUKF's, MJUKF's or the dual
-/// filter's). Settings depend only on the sizes, so it serves any `Model` of the experiment's shape.
+/// filter's, in either covariance form). Settings depend only on the sizes, so it serves any `Model`
+/// of the experiment's shape.
 template <template <class...> class F, class Experiment, class Model = typename Experiment::Model>
 auto presetSettings() {
   using E = typename Experiment::Model;
-  if constexpr (std::is_same_v<F<E, int>, Ukf<E, int>>)
+  if constexpr (familyOf<F, E> == Family::Ukf)
     return Experiment::ukf();
-  else if constexpr (std::is_same_v<F<E, int>, JointUkf<E, int>>)
+  else if constexpr (familyOf<F, E> == Family::Joint)
     return Experiment::jointUkf();
-  else if constexpr (std::is_same_v<F<E, int>, ModifiedJointUkf<E, int>>)
+  else if constexpr (familyOf<F, E> == Family::ModifiedJoint)
     return Experiment::modifiedJointUkf();
   else
     return Experiment::dualUkf();
@@ -125,7 +153,7 @@ struct PaperFilter {
   using Model = typename Experiment::Model;
   using Type = Filter<Model, ITrBdf2<typename Model::Scalar>>;
   static Type make() {
-    constexpr bool knownParameters = std::is_same_v<Type, Ukf<Model, ITrBdf2<typename Model::Scalar>>>;
+    constexpr bool knownParameters = familyOf<Filter, Model> == Family::Ukf;
     return Type(Model(), Experiment::initialState(),
                 knownParameters ? Model::trueParameters() : Experiment::initialParameters(),
                 presetSettings<Filter, Experiment>());

@@ -17,6 +17,7 @@
 
 #include <Eigen/Core>
 
+#include "mjukf/covariance_form.hpp"
 #include "mjukf/covariance_repair.hpp"
 #include "mjukf/detail/linear_algebra.hpp"
 #include "mjukf/detail/validation.hpp"
@@ -184,16 +185,84 @@ class CovarianceGuard {
   Matrix candidate_ = Matrix::Zero();
 };
 
+/// How the sigma points of a measurement update relate to its prior (x̂⁻, P⁻ = S⁻ S⁻ᵀ): what the
+/// square-root form's posterior factor may rely on (docs/algorithms.md §10; the full form reads none
+/// of it). With Δχᵢ = χᵢ − x̂⁻:
+enum class PriorPoints {
+  /// drawn from (x̂⁻, S⁻) by the symmetric draw: x̂⁻ is their weighted mean and Σ Wcᵢ Δχᵢ Δχᵢᵀ = P⁻;
+  Drawn,
+  /// propagated, and (x̂⁻, P⁻) predicted from exactly these points, x̂⁻ = Σ Wmᵢ χᵢ and
+  /// P⁻ = Σ Wcᵢ Δχᵢ Δχᵢᵀ + Q, neither repaired nor clamped afterwards;
+  Predicted,
+  /// neither (a mean clamped to parameter bounds, a repaired P⁻): only P⁻ = S⁻ S⁻ᵀ is known.
+  Other,
+};
+
+/// The prior of a measurement update: its mean, covariance and lower factor, and how the points the
+/// update measures relate to them.
+template <class Vector, class Matrix>
+struct PriorOf {
+  const Vector& mean;
+  const Matrix& covariance;
+  const Matrix& factor;
+  PriorPoints points;
+};
+
+// What only the square-root form keeps: an empty base of the estimate in the full form (so the full
+// form's estimate is as large as before), in the square-root form the factors of the noises (computed
+// once, at construction), √|Wcᵢ|, the candidate factor and where it came from, how the points relate to
+// the estimates, and the workspace of the Householder triangularisations.
+template <class Scalar, int L, int M, int Count, class Form>
+struct SquareRootPart {};
+
+template <class Scalar, int L, int M, int Count>
+struct SquareRootPart<Scalar, L, M, Count, SquareRootCovariance> {
+  using Matrix = Eigen::Matrix<Scalar, L, L>;
+  using MeasMatrix = Eigen::Matrix<Scalar, M, M>;
+  // Where the candidate's factor and covariance come from.
+  enum class Candidate {
+    Factor,               // S obtained without subtraction; P = S Sᵀ is formed when it is settled
+    FactorAndCovariance,  // S and P both given (a correction that changed nothing)
+    CovarianceOnly,       // S could not be obtained: the full form's P, settled by the CovarianceGuard
+  };
+
+  Matrix processNoiseRoot = Matrix::Zero();              // G with G Gᵀ = Q
+  MeasMatrix measurementNoiseRoot = MeasMatrix::Zero();  // the lower Cholesky factor of R
+  Eigen::Matrix<Scalar, Count, 1> weightRoots = Eigen::Matrix<Scalar, Count, 1>::Zero();  // √|Wcᵢ|
+  Matrix candidateFactor = Matrix::Zero();
+  Candidate candidate = Candidate::CovarianceOnly;
+  Status settled = Status::Ok;                   // what the last settle() returned
+  PriorPoints workPrior = PriorPoints::Other;    // the work points and the candidate (mean, factor)
+  PriorPoints pointsPrior = PriorPoints::Other;  // the committed points and the committed estimate
+  Eigen::Matrix<Scalar, L, 1> predictedMean = Eigen::Matrix<Scalar, L, 1>::Zero();  // Σ Wmᵢ χᵢ, unclamped
+  // Workspace.
+  Eigen::Matrix<Scalar, L, Count + L> predictionStack = Eigen::Matrix<Scalar, L, Count + L>::Zero();  // [√Wc Δχ | G]
+  Eigen::Matrix<Scalar, M, Count + M> innovationStack = Eigen::Matrix<Scalar, M, Count + M>::Zero();  // [√Wc ΔY | √R]
+  Eigen::Matrix<Scalar, L, Count + L + M> posteriorStack =  // [√Wc (Δχ − K ΔY) | G or 0 | K √R]
+      Eigen::Matrix<Scalar, L, Count + L + M>::Zero();
+  Eigen::Matrix<Scalar, L, M> gain = Eigen::Matrix<Scalar, L, M>::Zero();  // K = U S_y⁻¹
+  MeasMatrix maskedNoise = MeasMatrix::Zero();                             // R' of a masked update
+  MeasMatrix maskedNoiseRoot = MeasMatrix::Zero();                         // its lower Cholesky factor
+  bool noiseRootValid = true;  // the factor of R (or R') of the last correction exists
+};
+
 // One unscented estimate of an L-vector measured through M components: the committed mean,
-// covariance, its Cholesky factor and propagated sigma points, the workspace a step computes into, and
-// the arithmetic of docs/algorithms.md §1–3. A step writes only to the candidates here and commits them
-// with one call, so "the stored factor is the Cholesky factor of the committed P" is kept by this class
-// alone: nothing else can assign P. The filters' estimate is one; the dual filter's parameters are a
-// second.
-template <class Scalar, int L, int M, class PointSet = MerweScaled>
-class Estimate {
+// covariance, its lower factor and propagated sigma points, the workspace a step computes into, and
+// the arithmetic of docs/algorithms.md §1–3 in the covariance form `Form` (covariance_form.hpp; the
+// square-root form's is §10, in `if constexpr` branches beside the full form's). A step writes only to
+// the candidates here and commits them with one call, so "the stored factor is a lower factor of the
+// committed P" is kept by this class alone: nothing else can assign P. In the full form the factor is
+// the Cholesky factor of P; in the square-root form it is the S the step propagated, and P = S Sᵀ is
+// formed from it once per committed step (L²(L + 1)/2 multiply-adds) so that covariance() can be
+// returned by reference. The filters' estimate is one; the dual filter's parameters are a second.
+template <class Scalar, int L, int M, class PointSet = MerweScaled, class Form = FullCovariance>
+class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Scalar, L>::Count, Form> {
+  static_assert(isCovarianceForm<Form>, "the covariance form is FullCovariance or SquareRootCovariance");
+  static constexpr bool SquareRoot = isSquareRootForm<Form>;
+
  public:
   using PointSetType = PointSet;
+  using FormType = Form;
   using SigmaPoints = typename PointSet::template Set<Scalar, L>;
   static constexpr int Count = SigmaPoints::Count;
   using Vector = Eigen::Matrix<Scalar, L, 1>;
@@ -206,24 +275,49 @@ class Estimate {
   using Diagnostics = UpdateDiagnostics<Scalar, M>;
   using Mask = MeasurementMask<M>;
   using Gate = MeasurementGate<Scalar, M>;
+  using Prior = PriorOf<Vector, Matrix>;
 
-  /// From sigma-point parameters that SigmaPoints::validate accepted (the filter's validate()).
-  Estimate(Validated, const SigmaPointParameters<Scalar>& parameters) : sigmaPoints_(Validated{}, parameters) {}
+  /// From sigma-point parameters that SigmaPoints::validate accepted (the filter's validate()) and the
+  /// process and measurement noise Q and R the steps will pass (Q symmetric positive semi-definite,
+  /// R positive definite). The square-root form keeps their factors, G with G Gᵀ = Q (psdSquareRoot: Q
+  /// may be singular or zero) and the Cholesky factor of R; the full form reads Q and R where a step
+  /// passes them and keeps nothing.
+  Estimate(Validated, const SigmaPointParameters<Scalar>& parameters, const Matrix& processNoise,
+           const MeasMatrix& measurementNoise)
+      : sigmaPoints_(Validated{}, parameters) {
+    if constexpr (SquareRoot) {
+      sr().processNoiseRoot = psdSquareRoot(processNoise);
+      if (!choleskyLower(measurementNoise, sr().measurementNoiseRoot))
+        sr().measurementNoiseRoot = psdSquareRoot(measurementNoise);
+      sr().weightRoots = sigmaPoints_.covarianceWeights().cwiseAbs().cwiseSqrt();
+    } else {
+      (void)processNoise;
+      (void)measurementNoise;
+    }
+  }
 
   // ---- The committed estimate ----------------------------------------------------------------------
   const Vector& mean() const { return mean_; }
   const Matrix& covariance() const { return covariance_; }
-  /// The lower Cholesky factor of covariance().
+  /// A lower factor of covariance(): its Cholesky factor (full form), or the propagated S of which it
+  /// is S Sᵀ (square-root form).
   const Matrix& factor() const { return factor_; }
   /// The points of the last time update, while they are still the estimate's (hasPoints()).
   const Points& points() const { return points_; }
   bool hasPoints() const { return hasPoints_; }
   const Diagnostics& diagnostics() const { return diagnostics_; }
   const SigmaPoints& sigmaPoints() const { return sigmaPoints_; }
+  /// The committed estimate as the prior of a measurement update: of its own points() (`drawnNow`
+  /// false, hasPoints()), or of points just drawn from it (true).
+  Prior prior(bool drawnNow) const {
+    PriorPoints points = PriorPoints::Other;
+    if constexpr (SquareRoot) points = drawnNow ? PriorPoints::Drawn : sr().pointsPrior;
+    return Prior{mean_, covariance_, factor_, points};
+  }
 
   /// Makes (mean, cov) the estimate, with cov symmetrised as every committed P is, and forgets the
   /// propagated points; the diagnostics are zeroed. Returns false, changing nothing, when the
-  /// symmetrised cov has no Cholesky factor or either is not finite.
+  /// symmetrised cov has no Cholesky factor or either is not finite. Both forms keep that factor.
   bool assign(const Vector& mean, const Matrix& cov) {
     Matrix symmetric = cov, factor;
     symmetrize(symmetric);
@@ -243,52 +337,98 @@ class Estimate {
   Status draw(const Vector& mean, const Matrix& lowerFactor) {
     if (!allFinite(mean)) return Status::NotPositiveDefinite;
     drawSymmetricPoints<SigmaPoints::HasCenter>(mean, lowerFactor, sigmaPoints_.gamma(), workPoints_);
+    if constexpr (SquareRoot) sr().workPrior = PriorPoints::Drawn;
     return Status::Ok;
   }
 
   /// §2: x̂⁻ = Σ Wmᵢ χᵢ⁺, P⁻ = Σ Wcᵢ (χᵢ⁺ − x̂⁻)(χᵢ⁺ − x̂⁻)ᵀ + Q from the propagated workPoints(), into
-  /// candidateMean() and candidateCovariance().
+  /// candidateMean() and candidateCovariance(). Square-root form (§10): S⁻ from
+  /// [√Wcᵢ (χᵢ⁺ − x̂⁻) for Wcᵢ ≥ 0 | G] by Householder, then a rank-one downdate by √|Wcᵢ| (χᵢ⁺ − x̂⁻) for
+  /// each Wcᵢ < 0; when either fails, the full form's P⁻ for settle() to check and repair.
   void predict(const Matrix& processNoise) {
     weightedMean(workPoints_, sigmaPoints_.meanWeights(), candidateMean_);
     deviations_.noalias() = workPoints_.colwise() - candidateMean_;
+    if constexpr (SquareRoot) {
+      sr().predictedMean = candidateMean_;
+      sr().workPrior = PriorPoints::Predicted;
+      sr().predictionStack.template rightCols<L>() = sr().processNoiseRoot;
+      if (weightedFactor(deviations_, sr().predictionStack, sr().candidateFactor)) {
+        sr().candidate = SquareRootPart_::Candidate::Factor;
+        return;
+      }
+      sr().candidate = SquareRootPart_::Candidate::CovarianceOnly;
+    }
     weightedOuterSum(deviations_, deviations_, sigmaPoints_.covarianceWeights(), candidateCovariance_);
     candidateCovariance_ += processNoise;
   }
 
-  /// §3 from `points` about the prior (`priorMean`, `priorCov`) and their images `measured` = Yᵢ, into
-  /// candidateMean(), candidateCovariance() and candidateDiagnostics(); on a status other than Ok the
-  /// candidates are unspecified. With `present` (null: all present), the missing components get zero
-  /// rows and columns in P_yy (one on its diagonal), in P_xy and in the innovation: the gain then has
-  /// zero columns there and the update is exactly that of the reduced model. `gate` refuses an update
-  /// whose NIS exceeds its threshold, before anything is computed from the gain.
-  Status correct(const Points& points, const MeasPoints& measured, const Vector& priorMean, const Matrix& priorCov,
-                 const MeasVector& y, const MeasMatrix& measurementNoise, const Mask* present, const Gate& gate) {
+  /// The dual filter's parameter time update (docs/algorithms.md §9), a random walk with forgetting:
+  /// x̂⁻ = x̂, P⁻ = P / λ + Q into the candidates. Square-root form: S⁻ from [S / √λ | G] by Householder,
+  /// or the full form's P⁻ when that fails.
+  void predictRandomWalk(Scalar forgetting, const Matrix& processNoise) {
+    candidateMean_ = mean_;
+    if constexpr (SquareRoot) {
+      sr().workPrior = PriorPoints::Other;  // no points yet: the caller draws them from the candidate
+      Eigen::Matrix<Scalar, L, 2 * L> stack;
+      stack.template leftCols<L>() = factor_ / std::sqrt(forgetting);
+      stack.template rightCols<L>() = sr().processNoiseRoot;
+      if (lowerFactorOfOuter(stack, sr().candidateFactor)) {
+        sr().candidate = SquareRootPart_::Candidate::Factor;
+        return;
+      }
+      sr().candidate = SquareRootPart_::Candidate::CovarianceOnly;
+    }
+    candidateCovariance_ = covariance_ / forgetting + processNoise;
+  }
+
+  /// §3 from `points` about `prior` and their images `measured` = Yᵢ, into candidateMean(),
+  /// candidateCovariance() and candidateDiagnostics(); on a status other than Ok the candidates are
+  /// unspecified. With `present` (null: all present), the missing components get zero rows and columns
+  /// in P_yy (one on its diagonal), in P_xy and in the innovation: the gain then has zero columns there
+  /// and the update is exactly that of the reduced model. `gate` refuses an update whose NIS exceeds
+  /// its threshold, before anything is computed from the gain. The square-root form (§10) factors P_yy
+  /// by Householder as P⁻ in predict(), and computes the posterior factor without subtracting
+  /// covariances where the prior's points allow it (prior.points Drawn or Predicted), by downdates of
+  /// S⁻ otherwise; when a factor cannot be obtained so, it falls back to the full form's matrix.
+  Status correct(const Points& points, const MeasPoints& measured, const Prior& prior, const MeasVector& y,
+                 const MeasMatrix& measurementNoise, const Mask* present, const Gate& gate) {
     if (!allFinite(measured)) return Status::NonFiniteResult;  // the model's g gave NaN or Inf
     Diagnostics& d = candidateDiagnostics_;
     MeasVector predictedMeasurement;
     weightedMean(measured, sigmaPoints_.meanWeights(), predictedMeasurement);  // ŷ
     measurementDeviations_.noalias() = measured.colwise() - predictedMeasurement;
-    deviations_.noalias() = points.colwise() - priorMean;
+    deviations_.noalias() = points.colwise() - prior.mean;
     const auto& weights = sigmaPoints_.covarianceWeights();
-    weightedOuterSum(measurementDeviations_, measurementDeviations_, weights, d.innovationCovariance);
-    d.innovationCovariance += measurementNoise;                                   // P_yy
+    if constexpr (!SquareRoot) {
+      weightedOuterSum(measurementDeviations_, measurementDeviations_, weights, d.innovationCovariance);
+      d.innovationCovariance += measurementNoise;  // P_yy
+    }
     weightedOuterSum(deviations_, measurementDeviations_, weights, gainFactor_);  // P_xy
     d.innovation = y - predictedMeasurement;
     int presentCount = M;
     if (present) {
       for (int j = 0; j < M; ++j) {
         if ((*present)(j)) continue;
-        d.innovationCovariance.row(j).setZero();
-        d.innovationCovariance.col(j).setZero();
-        d.innovationCovariance(j, j) = Scalar(1);
+        if constexpr (SquareRoot) {
+          measurementDeviations_.row(j).setZero();  // P_yy's row and column j are made by innovationFactor()
+        } else {
+          d.innovationCovariance.row(j).setZero();
+          d.innovationCovariance.col(j).setZero();
+          d.innovationCovariance(j, j) = Scalar(1);
+        }
         gainFactor_.col(j).setZero();
         d.innovation(j) = Scalar(0);  // y(j) may be NaN: overwrite, never multiply by 0
         --presentCount;
       }
     }
 
-    if (!allFinite(d.innovationCovariance) || !choleskyLower(d.innovationCovariance, innovationFactor_))
-      return Status::InnovationNotPositiveDefinite;
+    if constexpr (SquareRoot) {
+      if (!squareRootInnovationFactor(measurementNoise, present, presentCount))
+        return Status::InnovationNotPositiveDefinite;
+    } else {
+      if (!allFinite(d.innovationCovariance) || !choleskyLower(d.innovationCovariance, innovationFactor_))
+        return Status::InnovationNotPositiveDefinite;
+    }
     // With P_yy = S Sᵀ, the gain is K = P_xy P_yy⁻¹ = U S⁻¹ with U = P_xy S⁻ᵀ, so that
     //   K ν = U w with w = S⁻¹ ν (the whitened innovation, whose |w|² is the NIS), and
     //   K P_yy Kᵀ = U Uᵀ:
@@ -301,20 +441,60 @@ class Estimate {
     if (!std::isfinite(d.nis) || !allFinite(d.innovation)) return Status::NonFiniteResult;
     if (presentCount > 0 && d.nis > gate.nisThreshold(presentCount - 1)) return Status::MeasurementRejected;
     whitenColumns(innovationFactor_, gainFactor_);  // P_xy → U
-    candidateMean_ = priorMean;
+    candidateMean_ = prior.mean;
     candidateMean_.noalias() += gainFactor_ * whitened;  // x̂ = x̂⁻ + K ν
-    candidateCovariance_ = priorCov;
+    if constexpr (SquareRoot) {
+      if (squareRootPosterior(prior, presentCount)) return Status::Ok;
+      sr().candidate = SquareRootPart_::Candidate::CovarianceOnly;
+    }
+    candidateCovariance_ = prior.covariance;
     candidateCovariance_.noalias() -= gainFactor_.lazyProduct(gainFactor_.transpose());  // P = P⁻ − K P_yy Kᵀ
     return Status::Ok;
   }
 
   /// What every step does with the covariance it is about to commit: symmetrise candidateCovariance(),
   /// check it has a Cholesky factor, repair it if not (covariance_repair.hpp). Ok, Repaired, or a
-  /// refusal. Only a covariance accepted here is committed.
-  Status settle(const CovarianceRepair<Scalar>& repair) { return guard_.settle(candidateCovariance_, repair); }
+  /// refusal. Only a covariance accepted here is committed. Square-root form: a factor obtained without
+  /// subtraction is accepted when it is finite with a positive diagonal (Ok; P = S Sᵀ is formed here,
+  /// exactly symmetric), NonFiniteResult otherwise; the full form's P of a step whose factor could not
+  /// be obtained goes through the same check and repair as in the full form, so that every status means
+  /// the same in both forms.
+  Status settle(const CovarianceRepair<Scalar>& repair) {
+    if constexpr (SquareRoot) {
+      using Candidate = typename SquareRootPart_::Candidate;
+      Status s;
+      if (sr().candidate == Candidate::CovarianceOnly) {
+        s = guard_.settle(candidateCovariance_, repair);
+        if (taken(s)) sr().candidateFactor = guard_.factor();
+      } else {
+        if (sr().candidate == Candidate::Factor) outerOfLower(sr().candidateFactor, candidateCovariance_);
+        const bool positive = (sr().candidateFactor.diagonal().array() > Scalar(0)).all();
+        s = positive && allFinite(sr().candidateFactor) && allFinite(candidateCovariance_) ? Status::Ok
+                                                                                           : Status::NonFiniteResult;
+      }
+      sr().settled = s;
+      return s;
+    } else {
+      return guard_.settle(candidateCovariance_, repair);
+    }
+  }
+
+  /// How workPoints() relate to the candidate (mean, factor) after settle(): Drawn from them, Predicted
+  /// (predict() formed them from these points, settled Ok and the mean was not moved since), or Other.
+  /// Only the square-root form tracks it (the full form: always Other).
+  PriorPoints workPointsPrior() const {
+    if constexpr (SquareRoot) {
+      if (sr().workPrior != PriorPoints::Predicted) return sr().workPrior;
+      const bool asPredicted = sr().settled == Status::Ok && candidateMean_ == sr().predictedMean;
+      return asPredicted ? PriorPoints::Predicted : PriorPoints::Other;
+    } else {
+      return PriorPoints::Other;
+    }
+  }
 
   /// Commits a time update that settle() accepted: its mean, covariance and factor, and its points.
   void commitPrediction() {
+    if constexpr (SquareRoot) sr().pointsPrior = workPointsPrior();
     points_ = workPoints_;
     hasPoints_ = true;
     commitCandidate();
@@ -339,25 +519,141 @@ class Estimate {
   const Vector& candidateMean() const { return candidateMean_; }
   Matrix& candidateCovariance() { return candidateCovariance_; }
   const Matrix& candidateCovariance() const { return candidateCovariance_; }
-  /// The factor of candidateCovariance() after settle() accepted it.
-  const Matrix& candidateFactor() const { return guard_.factor(); }
-  /// After correct() returned Ok: U = P_xy S⁻ᵀ and the lower Cholesky factor S of P_yy, so that the
-  /// gain is K = U S⁻¹.
+  /// The lower factor of candidateCovariance() after settle() accepted it.
+  const Matrix& candidateFactor() const {
+    if constexpr (SquareRoot)
+      return sr().candidateFactor;
+    else
+      return guard_.factor();
+  }
+  /// After correct() returned Ok: U = P_xy S⁻ᵀ and the lower factor S of P_yy (Cholesky, or
+  /// Householder in the square-root form), so that the gain is K = U S⁻¹.
   const CrossMatrix& gainFactor() const { return gainFactor_; }
   const MeasMatrix& innovationFactor() const { return innovationFactor_; }
 
  private:
+  using SquareRootPart_ = SquareRootPart<Scalar, L, M, Count, Form>;
+  SquareRootPart_& sr() { return *this; }
+  const SquareRootPart_& sr() const { return *this; }
+
   void commitCandidate() {
     mean_ = candidateMean_;
     covariance_ = candidateCovariance_;
-    factor_ = guard_.factor();
+    factor_ = candidateFactor();
+  }
+
+  // ---- The square-root form (docs/algorithms.md §10) ------------------------------------------------
+
+  // S with S Sᵀ = Σ Wcᵢ dᵢ dᵢᵀ + E Eᵀ, E the columns of `stack` after the first Count, which the caller
+  // has set: the dᵢ of nonnegative weight, scaled by √Wcᵢ, are triangularised together with E
+  // (lowerFactorOfOuter; a point of negative weight leaves a zero column), then S is downdated by
+  // √|Wcᵢ| dᵢ for each negative weight (Wc₀ < 0 when α < 1). False when either fails.
+  template <int Rows, int Cols>
+  bool weightedFactor(const Eigen::Matrix<Scalar, Rows, Count>& d, Eigen::Matrix<Scalar, Rows, Cols>& stack,
+                      Eigen::Matrix<Scalar, Rows, Rows>& s) const {
+    static_assert(Cols >= Count, "the stack holds the weighted deviations first");
+    const auto& weights = sigmaPoints_.covarianceWeights();
+    for (int i = 0; i < Count; ++i) {
+      if (weights(i) < Scalar(0))
+        stack.col(i).setZero();
+      else
+        stack.col(i) = sr().weightRoots(i) * d.col(i);
+    }
+    if (!lowerFactorOfOuter(stack, s)) return false;
+    for (int i = 0; i < Count; ++i)
+      if (weights(i) < Scalar(0) && !choleskyRankOneUpdate(s, sr().weightRoots(i) * d.col(i), -1)) return false;
+    return true;
+  }
+
+  // The factor S_y of P_yy into innovationFactor_ and P_yy = S_y S_yᵀ into the diagnostics. S_y from
+  // [√Wcᵢ ΔYᵢ | √R'] (weightedFactor), where a masked update has zeroed the rows of ΔY of the missing
+  // components and R' is R with their rows and columns zeroed and 1 on the diagonal, so that
+  // S_y S_yᵀ is the full form's P_yy in exact arithmetic (S_y then has the unit vector as row and column
+  // j). When that fails: the full form's P_yy and its Cholesky factor. False when neither exists.
+  template <class F = Form>
+  bool squareRootInnovationFactor(const MeasMatrix& measurementNoise, const Mask* present, int presentCount) {
+    static_assert(isSquareRootForm<F>);
+    Diagnostics& d = candidateDiagnostics_;
+    const MeasMatrix* noiseRoot = &sr().measurementNoiseRoot;
+    bool obtained = true;
+    if (present && presentCount < M) {
+      sr().maskedNoise = measurementNoise;
+      for (int j = 0; j < M; ++j) {
+        if ((*present)(j)) continue;
+        sr().maskedNoise.row(j).setZero();
+        sr().maskedNoise.col(j).setZero();
+        sr().maskedNoise(j, j) = Scalar(1);
+      }
+      obtained = choleskyLower(sr().maskedNoise, sr().maskedNoiseRoot);
+      noiseRoot = &sr().maskedNoiseRoot;
+    }
+    sr().noiseRootValid = obtained;
+    if (obtained) {
+      sr().innovationStack.template rightCols<M>() = *noiseRoot;
+      obtained = weightedFactor(measurementDeviations_, sr().innovationStack, innovationFactor_);
+    }
+    if (obtained) {
+      outerOfLower(innovationFactor_, d.innovationCovariance);
+      if (allFinite(d.innovationCovariance)) return true;
+    }
+    // The full form's P_yy (ΔY's missing rows are zero already).
+    weightedOuterSum(measurementDeviations_, measurementDeviations_, sigmaPoints_.covarianceWeights(),
+                     d.innovationCovariance);
+    d.innovationCovariance += measurementNoise;
+    if (present)
+      for (int j = 0; j < M; ++j) {
+        if ((*present)(j)) continue;
+        d.innovationCovariance.row(j).setZero();
+        d.innovationCovariance.col(j).setZero();
+        d.innovationCovariance(j, j) = Scalar(1);
+      }
+    return allFinite(d.innovationCovariance) && choleskyLower(d.innovationCovariance, innovationFactor_);
+  }
+
+  // The posterior factor into sr().candidateFactor (docs/algorithms.md §10), after U = gainFactor_:
+  //  - nothing present (K = 0): the prior's factor and covariance, unchanged;
+  //  - points Drawn from the prior or Predicted with it (the identity of §10 holds), with an obtained
+  //    factor of R': the array form, S⁺ from [√Wcᵢ (Δχᵢ − K ΔYᵢ) | G (Predicted) | K √R'], downdated
+  //    for negative weights (weightedFactor), no subtraction of covariances;
+  //  - otherwise: S⁻ downdated by the M columns of U, S⁺ S⁺ᵀ = P⁻ − U Uᵀ.
+  // False when the factor could not be obtained (the caller then forms the full form's P). (A template,
+  // as the one above, so that only the square-root form instantiates it.)
+  template <class F = Form>
+  bool squareRootPosterior(const Prior& prior, int presentCount) {
+    static_assert(isSquareRootForm<F>);
+    using Candidate = typename SquareRootPart_::Candidate;
+    if (presentCount == 0) {
+      if (&prior.factor != &sr().candidateFactor) sr().candidateFactor = prior.factor;
+      candidateCovariance_ = prior.covariance;
+      sr().candidate = Candidate::FactorAndCovariance;
+      return true;
+    }
+    sr().candidate = Candidate::Factor;
+    const bool maskedRoot = presentCount < M;
+    if (prior.points != PriorPoints::Other && sr().noiseRootValid) {
+      // K = U S_y⁻¹; the deviations become Δχᵢ − K ΔYᵢ (ΔY's missing rows are zero, and so are K's
+      // columns there).
+      sr().gain = gainFactor_;
+      rightSolveLowerInPlace(innovationFactor_, sr().gain);
+      deviations_.noalias() -= sr().gain.lazyProduct(measurementDeviations_);
+      auto& stack = sr().posteriorStack;
+      if (prior.points == PriorPoints::Predicted)
+        stack.template middleCols<L>(Count) = sr().processNoiseRoot;
+      else
+        stack.template middleCols<L>(Count).setZero();
+      const MeasMatrix& noiseRoot = maskedRoot ? sr().maskedNoiseRoot : sr().measurementNoiseRoot;
+      stack.template rightCols<M>().noalias() = sr().gain.lazyProduct(noiseRoot);
+      return weightedFactor(deviations_, stack, sr().candidateFactor);
+    }
+    if (&prior.factor != &sr().candidateFactor) sr().candidateFactor = prior.factor;
+    return choleskyRankUpdate(sr().candidateFactor, gainFactor_, -1);
   }
 
   SigmaPoints sigmaPoints_;
   // Committed.
   Vector mean_ = Vector::Zero();
   Matrix covariance_ = Matrix::Zero();
-  Matrix factor_ = Matrix::Zero();  // S with covariance_ = S Sᵀ
+  Matrix factor_ = Matrix::Zero();  // lower S with covariance_ = S Sᵀ
   Points points_ = Points::Zero();  // χᵢ⁺ of the last time update, used by the measurement update
   bool hasPoints_ = false;
   Diagnostics diagnostics_;
@@ -365,7 +661,7 @@ class Estimate {
   // construction, so that copying a filter before its first step copies no indeterminate values.
   Points workPoints_ = Points::Zero();                     // drawn, then propagated in place
   MeasPoints measuredPoints_ = MeasPoints::Zero();         // Yᵢ = g(χᵢ⁺)
-  Points deviations_ = Points::Zero();                     // χᵢ⁺ − x̂⁻
+  Points deviations_ = Points::Zero();                     // χᵢ⁺ − x̂⁻ (square-root posterior: − K ΔYᵢ)
   MeasPoints measurementDeviations_ = MeasPoints::Zero();  // Yᵢ − ŷ
   CrossMatrix gainFactor_ = CrossMatrix::Zero();           // P_xy, then U = P_xy S⁻ᵀ
   MeasMatrix innovationFactor_ = MeasMatrix::Zero();       // S with P_yy = S Sᵀ
@@ -492,7 +788,7 @@ constexpr Status combineTaken(Status a, Status b) { return a == Status::Ok ? b :
 /// Repaired leaves the filter exactly as it was (docs/robustness.md). `L` is the dimension of the
 /// vector the filter draws sigma points for; `Policy` is how it estimates parameters (section 3 above).
 template <class Filter, class Model_, class Integrator_, class Settings_, class Policy, int L,
-          class PointSet = MerweScaled>
+          class PointSet = MerweScaled, class Form = FullCovariance>
 class UnscentedEngine {
   static_assert(!isDiscreteTime<Model_> || std::is_same_v<Integrator_, NoIntegrator<typename Model_::Scalar>>,
                 "a discrete-time model (it has transition()) is not integrated: leave the integrator out");
@@ -528,6 +824,8 @@ class UnscentedEngine {
   using SigmaPoints = typename PointSet::template Set<Scalar, L>;
   /// The number of sigma points of the filter's estimate.
   static constexpr int SigmaPointCount = SigmaPoints::Count;
+  /// The covariance form: `FullCovariance` or `SquareRootCovariance` (covariance_form.hpp).
+  using CovarianceForm = Form;
 
   /// Unscented time update (docs/algorithms.md §2) from t over `steps` steps of size h, with the
   /// model's input signal u(t) evaluated at every stage time (once per distinct stage time, shared by
@@ -613,7 +911,7 @@ class UnscentedEngine {
 
   /// \cond INTERNAL
  protected:
-  using Est = Estimate<Scalar, L, MeasDim, PointSet>;
+  using Est = Estimate<Scalar, L, MeasDim, PointSet, Form>;
   using Vector = typename Est::Vector;
   using Matrix = typename Est::Matrix;
   using Points = typename Est::Points;
@@ -642,7 +940,7 @@ class UnscentedEngine {
       : model_(model),
         integrator_(integrator),
         settings_(settings),
-        estimate_(Validated{}, settings.sigmaPoints),
+        estimate_(Validated{}, settings.sigmaPoints, settings.processNoise, settings.measurementNoise),
         policy_(settings, initialParameters) {
     // symmetrised, as every committed P is
     estimate_.assign(Filter::initialMean(initialState, initialParameters), settings.initialCovariance);
@@ -710,21 +1008,20 @@ class UnscentedEngine {
     const bool drawPoints = settings_.redrawPointsForUpdate || !estimate_.hasPoints();
     if (drawPoints)
       if (const Status s = estimate_.draw(estimate_.mean(), estimate_.factor()); s != Status::Ok) return s;
-    return correctAndCommit(drawPoints ? estimate_.workPoints() : estimate_.points(), estimate_.mean(),
-                            estimate_.covariance(), y, present);
+    return correctAndCommit(drawPoints ? estimate_.workPoints() : estimate_.points(), estimate_.prior(drawPoints), y,
+                            present);
   }
 
   // §3 from `points` about a prior, then the policy's parameter correction, then the checks and the
   // commit of both.
-  Status correctAndCommit(const Points& points, const Vector& priorMean, const Matrix& priorCovariance, const Meas& y,
-                          const Mask* present) {
+  Status correctAndCommit(const Points& points, const typename Est::Prior& prior, const Meas& y, const Mask* present) {
     policy_.measurePoints(model_, points, estimate_.measuredPoints());
-    if (const Status s = estimate_.correct(points, estimate_.measuredPoints(), priorMean, priorCovariance, y,
-                                           settings_.measurementNoise, present, settings_.gate);
+    if (const Status s = estimate_.correct(points, estimate_.measuredPoints(), prior, y, settings_.measurementNoise,
+                                           present, settings_.gate);
         s != Status::Ok)
       return s;
     const Status parameters = policy_.correctParameters(
-        Correction<Model, Settings, Est>{model_, settings_, y, present, estimate_.measuredPoints(), priorMean,
+        Correction<Model, Settings, Est>{model_, settings_, y, present, estimate_.measuredPoints(), prior.mean,
                                          estimate_.gainFactor(), estimate_.innovationFactor()});
     if (!taken(parameters)) return parameters;
     if (!allFinite(estimate_.candidateMean())) return Status::NonFiniteResult;
@@ -750,12 +1047,14 @@ class UnscentedEngine {
 
 /// \cond INTERNAL
 // The engine of filter `Filter` over `Model`, with the parameter policy template `PolicyOf` (given the
-// model, stepper, settings and estimate) and an estimate of dimension L drawn with `PointSet`.
+// model, stepper, settings and estimate) and an estimate of dimension L drawn with `PointSet`, in the
+// covariance form `Form`.
 template <class Filter, class Model, class Integrator, class Settings,
-          template <class, class, class, class> class PolicyOf, int L, class PointSet>
+          template <class, class, class, class> class PolicyOf, int L, class PointSet, class Form>
 using EngineOf = UnscentedEngine<
     Filter, Model, Integrator, Settings,
-    PolicyOf<Model, Integrator, Settings, Estimate<typename Model::Scalar, L, Model::MeasDim, PointSet>>, L, PointSet>;
+    PolicyOf<Model, Integrator, Settings, Estimate<typename Model::Scalar, L, Model::MeasDim, PointSet, Form>>, L,
+    PointSet, Form>;
 
 /// \endcond
 
