@@ -12,7 +12,6 @@
 #include <Eigen/LU>
 #include <gtest/gtest.h>
 
-#include "common/csv.hpp"
 #include "mjukf/dual_ukf.hpp"
 #include "mjukf/integrators/rk4.hpp"
 #include "mjukf/models/coupled_tank.hpp"
@@ -22,6 +21,7 @@
 #include "paper/experiments.hpp"
 #include "paper/rmse.hpp"
 #include "paper/schedule.hpp"
+#include "reference_data.hpp"
 #include "robustness_support.hpp"
 #include "test_support.hpp"
 
@@ -38,6 +38,7 @@ using mjukf::DualUkf;
 using mjukf::DualUkfOrdering;
 using mjukf::Status;
 using mjukf::testing::bitwiseSame;
+using mjukf::testing::referenceMeasurements;
 
 constexpr DualUkfOrdering kOrderings[] = {DualUkfOrdering::PriorParameters, DualUkfOrdering::UpdatedParameters};
 
@@ -537,17 +538,6 @@ TEST(DualUkf, OrderingsDifferWhereThetaDrivesTheDynamics) {
 
 // ---------------------------------------------------------------------------------------------------
 // (e) The paper's robot data with the library's dual UKF settings.
-
-template <class Meas>
-std::vector<Meas> referenceMeasurements(const std::string& file) {
-  const auto table = mjukf::examples::readCsv(std::string(MJUKF_DATA_DIR) + "/" + file);
-  std::vector<Meas> rows(table.rows());
-  for (int c = 0; c < Meas::RowsAtCompileTime; ++c) {
-    const auto& column = table.column("y" + std::to_string(c + 1));
-    for (std::size_t k = 0; k < rows.size(); ++k) rows[k](c) = typename Meas::Scalar(column[k]);
-  }
-  return rows;
-}
 
 // paper::FlexibleJointExperiment::dualUkf() over flexible_joint_reference.csv with the paper's
 // schedule (I-TR-BDF2, h = 1 ms, a measurement every 5 steps): the run completes and the RMSE of θ

@@ -35,13 +35,13 @@
 #include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
 
-#include "common/csv.hpp"
 #include "mjukf/covariance_form.hpp"
 #include "mjukf/dual_ukf.hpp"
 #include "mjukf/joint_ukf.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
 #include "mjukf/ukf.hpp"
 #include "paper/experiments.hpp"
+#include "reference_data.hpp"
 #include "robustness_support.hpp"
 #include "test_support.hpp"
 
@@ -49,22 +49,11 @@ namespace {
 
 using mjukf::Status;
 using mjukf::testing::IsDual;
+using mjukf::testing::referenceMeasurements;
 using mjukf::testing::SquareRoot;
 
 using Robot = mjukf::paper::FlexibleJointExperiment<double>;
 using Tank = mjukf::paper::CoupledTankExperiment<double>;
-
-// The measurement rows y_k of a reference file, columns y1 … ym.
-template <class Meas>
-std::vector<Meas> measurements(const std::string& file) {
-  const auto table = mjukf::examples::readCsv(std::string(MJUKF_DATA_DIR) + "/" + file);
-  std::vector<Meas> rows(table.rows());
-  for (int c = 0; c < Meas::RowsAtCompileTime; ++c) {
-    const auto& column = table.column("y" + std::to_string(c + 1));
-    for (std::size_t k = 0; k < rows.size(); ++k) rows[k](c) = typename Meas::Scalar(column[k]);
-  }
-  return rows;
-}
 
 template <class A, class B>
 double relative(const A& sr, const B& full) {
@@ -221,7 +210,7 @@ void expectWithinBound(const Comparison& c, const std::string& what) {
 template <class Experiment>
 void compareAllFilters(const char* file, Variant variant = {}, bool parameterChange = false) {
   using Model = typename Experiment::Model;
-  const auto y = measurements<typename Model::Meas>(file);
+  const auto y = referenceMeasurements<typename Model::Meas>(file);
   const Model model;
   const auto x0 = Experiment::initialState();
   const auto theta0 = Experiment::initialParameters();
@@ -372,7 +361,7 @@ TEST(SquareRootForm, FloatTankWithNearExactMeasurements) {
   using TankF = mjukf::paper::CoupledTankExperiment<float>;
   using ModelF = TankF::Model;
   using ModelD = Tank::Model;
-  auto yd = measurements<ModelD::Meas>("coupled_tank_reference.csv");
+  auto yd = referenceMeasurements<ModelD::Meas>("coupled_tank_reference.csv");
   yd.resize(20001);
   std::vector<ModelF::Meas> yf(yd.size());
   for (std::size_t k = 0; k < yd.size(); ++k) yf[k] = yd[k].cast<float>();
