@@ -133,17 +133,18 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
   Vector propagateMean(const Step& step, const Vector& mean) {
     return step.propagate(estimate_.mean(), mean);
   }
-  // Yᵢ = g(χᵢ⁺, θ̂)
-  void measurePoints(const Model& model, const Points& points, MeasPoints& measured) {
+  // Yᵢ = g(χᵢ⁺, u, θ̂)
+  void measurePoints(const Model& model, const Input& u, const Points& points, MeasPoints& measured) {
     const Param& theta = stateFilterParameters();
-    for (int i = 0; i < Base::Count; ++i) measured.col(i) = model.measurement(points.col(i), theta);
+    for (int i = 0; i < Base::Count; ++i) measured.col(i) = measureModel(model, points.col(i), u, theta);
   }
 
   // The parameters first, into their candidates, then the state; the engine's correctAndCommit commits
   // both (commitCorrection) or neither.
   template <class Engine>
-  Status update(Engine& engine, const Meas& y, const Mask* present) {
-    const Status parameters = correctParameterFilter(engine.model(), engine.settings(), engine.state(), y, present);
+  Status update(Engine& engine, const Meas& y, const Input& u, const Mask* present) {
+    const Status parameters =
+        correctParameterFilter(engine.model(), engine.settings(), engine.state(), y, u, present);
     if (!taken(parameters)) return parameters;
     Status state;
     if (engine.settings().ordering == DualUkfOrdering::UpdatedParameters && hasPrior_) {
@@ -156,12 +157,12 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
         // correction reads it before it writes its own candidate factor.
         const typename Est::Prior prior{repredictedMean_, repredictedCovariance_, est.candidateFactor(),
                                         est.workPointsPrior()};
-        const Status corrected = engine.correctAndCommit(est.workPoints(), prior, y, present);
+        const Status corrected = engine.correctAndCommit(est.workPoints(), prior, y, u, present);
         state = taken(corrected) ? combineTaken(corrected, state) : corrected;
       }
       useCorrectedParameters_ = false;
     } else {
-      state = engine.correctState(y, present);
+      state = engine.correctState(y, u, present);
     }
     return taken(state) ? combineTaken(state, parameters) : state;
   }
@@ -209,14 +210,14 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
   // state's gate decides), into its candidates, with bounds applied; committed with the state's
   // correction.
   Status correctParameterFilter(const Model& model, const Settings& s, const State& state, const Meas& y,
-                                const Mask* present) {
+                                const Input& u, const Mask* present) {
     ParameterEstimate& pe = estimate_;
     const bool drawn = !pe.hasPoints();
     if (drawn)
       if (const Status st = pe.draw(pe.mean(), pe.factor()); st != Status::Ok) return st;
     const auto& thetas = drawn ? pe.workPoints() : pe.points();
-    for (int j = 0; j < ParameterCount; ++j)  // Dⱼ = g(Φ_h(x̂_{k−1}; θⱼ), θⱼ)
-      pe.measuredPoints().col(j) = model.measurement(drawn ? state : State(propagatedStates_.col(j)), thetas.col(j));
+    for (int j = 0; j < ParameterCount; ++j)  // Dⱼ = g(Φ_h(x̂_{k−1}; θⱼ), u, θⱼ)
+      pe.measuredPoints().col(j) = measureModel(model, drawn ? state : State(propagatedStates_.col(j)), u, thetas.col(j));
     if (const Status st =
             pe.correct(thetas, pe.measuredPoints(), pe.prior(drawn), y, observationNoise_, present, noGate_);
         st != Status::Ok)

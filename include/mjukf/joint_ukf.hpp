@@ -60,15 +60,16 @@ class AugmentedParameters : public ParameterPolicy<Model, Integrator, Settings, 
     next.template head<StateDim>() = step.propagate(Param(z.template tail<ParamDim>()), z.template head<StateDim>());
     return next;
   }
-  // Yᵢ = g(xᵢ, θᵢ) of zᵢ = [xᵢ; θᵢ]
-  void measurePoints(const Model& model, const Points& points, MeasPoints& measured) {
+  // Yᵢ = g(xᵢ, u, θᵢ) of zᵢ = [xᵢ; θᵢ]
+  void measurePoints(const Model& model, const typename Base::Input& u, const Points& points, MeasPoints& measured) {
     for (int i = 0; i < Base::Count; ++i)
-      measured.col(i) =
-          model.measurement(points.col(i).template head<StateDim>(), points.col(i).template tail<ParamDim>());
+      measured.col(i) = measureModel(model, points.col(i).template head<StateDim>(), u,
+                                     points.col(i).template tail<ParamDim>());
   }
   template <class Engine>
-  Status update(Engine& engine, const typename Base::Meas& y, const typename Base::Mask* present) {
-    return engine.correctState(y, present);
+  Status update(Engine& engine, const typename Base::Meas& y, const typename Base::Input& u,
+                const typename Base::Mask* present) {
+    return engine.correctState(y, u, present);
   }
   Status correctParameters(const typename Base::CorrectionOf&) { return Status::Ok; }
   // The θ block of every committed mean within the bounds (parameter_bounds.hpp).

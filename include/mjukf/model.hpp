@@ -12,8 +12,9 @@
 ///   using State = Eigen::Matrix<Scalar, StateDim, 1>;   // and Param, Meas, Input likewise
 ///   // ẋ = f(x, u, θ, t)
 ///   State derivative(Scalar t, const State& x, const Input& u, const Param& theta) const;
-///   // y = g(x, θ)
+///   // y = g(x, θ), or, for a measurement that depends on the input, y = g(x, u, θ) (give exactly one):
 ///   Meas measurement(const State& x, const Param& theta) const;
+///   // Meas measurement(const State& x, const Input& u, const Param& theta) const;
 ///   // Optional: a known input signal u(t), evaluated at every stage time of the integrator. It must
 ///   // be a function of t alone: a time update evaluates it once per distinct stage time and gives
 ///   // the value to every sigma point.
@@ -58,16 +59,20 @@ template <class T>
 struct HasInputSignal<T, std::void_t<decltype(std::declval<const T&>().input(std::declval<typename T::Scalar>()))>>
     : std::true_type {};
 
+// Detection of each model function by its call alone; its return type is checked separately
+// (ReturnsVector), so that a function returning the wrong type is named in checkModel's message
+// instead of being taken for a missing one.
 template <class T, class = void>
 struct HasDerivative : std::false_type {};
 template <class T>
 struct HasDerivative<T, std::void_t<decltype(std::declval<const T&>().derivative(
                             std::declval<typename T::Scalar>(), std::declval<const typename T::State&>(),
                             std::declval<const typename T::Input&>(), std::declval<const typename T::Param&>()))>>
-    : std::is_convertible<decltype(std::declval<const T&>().derivative(
-                              std::declval<typename T::Scalar>(), std::declval<const typename T::State&>(),
-                              std::declval<const typename T::Input&>(), std::declval<const typename T::Param&>())),
-                          typename T::State> {};
+    : std::true_type {
+  using Result = decltype(std::declval<const T&>().derivative(
+      std::declval<typename T::Scalar>(), std::declval<const typename T::State&>(),
+      std::declval<const typename T::Input&>(), std::declval<const typename T::Param&>()));
+};
 
 template <class T, class = void>
 struct HasTransition : std::false_type {};
@@ -75,21 +80,63 @@ template <class T>
 struct HasTransition<T, std::void_t<decltype(std::declval<const T&>().transition(
                             std::declval<typename T::Scalar>(), std::declval<typename T::Scalar>(),
                             std::declval<const typename T::State&>(), std::declval<const typename T::Input&>(),
-                            std::declval<const typename T::Param&>()))>>
-    : std::is_convertible<decltype(std::declval<const T&>().transition(
-                              std::declval<typename T::Scalar>(), std::declval<typename T::Scalar>(),
-                              std::declval<const typename T::State&>(), std::declval<const typename T::Input&>(),
-                              std::declval<const typename T::Param&>())),
-                          typename T::State> {};
+                            std::declval<const typename T::Param&>()))>> : std::true_type {
+  using Result = decltype(std::declval<const T&>().transition(
+      std::declval<typename T::Scalar>(), std::declval<typename T::Scalar>(), std::declval<const typename T::State&>(),
+      std::declval<const typename T::Input&>(), std::declval<const typename T::Param&>()));
+};
 
+// y = g(x, θ)
 template <class T, class = void>
 struct HasMeasurement : std::false_type {};
 template <class T>
 struct HasMeasurement<T, std::void_t<decltype(std::declval<const T&>().measurement(
                              std::declval<const typename T::State&>(), std::declval<const typename T::Param&>()))>>
-    : std::is_convertible<decltype(std::declval<const T&>().measurement(std::declval<const typename T::State&>(),
-                                                                        std::declval<const typename T::Param&>())),
-                          typename T::Meas> {};
+    : std::true_type {
+  using Result = decltype(std::declval<const T&>().measurement(std::declval<const typename T::State&>(),
+                                                               std::declval<const typename T::Param&>()));
+};
+
+// y = g(x, u, θ)
+template <class T, class = void>
+struct HasInputMeasurement : std::false_type {};
+template <class T>
+struct HasInputMeasurement<T, std::void_t<decltype(std::declval<const T&>().measurement(
+                                  std::declval<const typename T::State&>(), std::declval<const typename T::Input&>(),
+                                  std::declval<const typename T::Param&>()))>> : std::true_type {
+  using Result = decltype(std::declval<const T&>().measurement(std::declval<const typename T::State&>(),
+                                                               std::declval<const typename T::Input&>(),
+                                                               std::declval<const typename T::Param&>()));
+};
+
+// True when `Result` (a model function's return type, references and const removed) is a column
+// vector of `Rows` entries of `Scalar` with its size fixed at compile time: Eigen would convert a
+// vector of another size and fail far from the model (YOU_MIXED_MATRICES_OF_DIFFERENT_SIZES).
+template <class Result, class Scalar, int Rows, class = void>
+struct ReturnsVector : std::false_type {};
+template <class Result, class Scalar, int Rows>
+struct ReturnsVector<Result, Scalar, Rows, std::void_t<typename std::decay_t<Result>::Scalar>>
+    : std::bool_constant<std::is_same_v<typename std::decay_t<Result>::Scalar, Scalar> &&
+                         int(std::decay_t<Result>::RowsAtCompileTime) == Rows &&
+                         int(std::decay_t<Result>::ColsAtCompileTime) == 1> {};
+
+// The return type of a detected function, or void when it is absent (checked only where present).
+template <class Has, class = void>
+struct ResultOf {
+  using type = void;
+};
+template <class Has>
+struct ResultOf<Has, std::void_t<typename Has::Result>> {
+  using type = typename Has::Result;
+};
+
+template <class Model, class Has, int Rows>
+constexpr bool returnsVectorIfPresent() {
+  if constexpr (Has::value)
+    return ReturnsVector<typename ResultOf<Has>::type, typename Model::Scalar, Rows>::value;
+  else
+    return true;
+}
 
 template <class Scalar, int Rows>
 using Vector = Eigen::Matrix<Scalar, Rows, 1>;
@@ -111,6 +158,13 @@ inline constexpr bool needsNoInputArgument = hasInputSignal<Model> || Model::Inp
 /// `derivative`.
 template <class Model>
 inline constexpr bool isDiscreteTime = detail::HasTransition<Model>::value;
+
+/// True when the model's measurement depends on the input, `measurement(x, u, θ)`, rather than
+/// `measurement(x, θ)`. A filter then passes, at a measurement update, the input in force at the
+/// measurement time: the model's `input(t)` at the filter's time (the end of its last time update or
+/// open-loop propagation), or the `u` given to `measurementUpdate(y, u)`.
+template <class Model>
+inline constexpr bool measurementTakesInput = detail::HasInputMeasurement<Model>::value;
 
 /// The integrator of a filter over a discrete-time model: none. It only marks the slot.
 template <class Scalar_>
@@ -150,9 +204,33 @@ constexpr bool checkModel() {
   static_assert(!(detail::HasDerivative<Model>::value && detail::HasTransition<Model>::value),
                 "Model has both `derivative` and `transition`: give one, so that it is clear whether the filter "
                 "integrates it");
-  static_assert(detail::HasMeasurement<Model>::value,
-                "Model needs `Meas measurement(const State&, const Param&) const`");
+  static_assert(detail::HasMeasurement<Model>::value || detail::HasInputMeasurement<Model>::value,
+                "Model needs `Meas measurement(const State&, const Param&) const` or, for a measurement that "
+                "depends on the input, `Meas measurement(const State&, const Input&, const Param&) const`");
+  static_assert(!(detail::HasMeasurement<Model>::value && detail::HasInputMeasurement<Model>::value),
+                "Model has both `measurement(x, theta)` and `measurement(x, u, theta)`: give one, so that it is "
+                "clear which input a filter passes");
+  static_assert(detail::returnsVectorIfPresent<Model, detail::HasDerivative<Model>, Model::StateDim>(),
+                "Model::derivative must return a column vector of StateDim entries of Scalar (Model::State)");
+  static_assert(detail::returnsVectorIfPresent<Model, detail::HasTransition<Model>, Model::StateDim>(),
+                "Model::transition must return a column vector of StateDim entries of Scalar (Model::State)");
+  static_assert(detail::returnsVectorIfPresent<Model, detail::HasMeasurement<Model>, Model::MeasDim>() &&
+                    detail::returnsVectorIfPresent<Model, detail::HasInputMeasurement<Model>, Model::MeasDim>(),
+                "Model::measurement must return a column vector of MeasDim entries of Scalar (Model::Meas)");
   return true;
+}
+
+/// y = g(x, u, θ) or g(x, θ), whichever the model gives: the one place the filters, `simulate` and the
+/// programs evaluate a measurement. `u` is ignored when the measurement does not depend on the input.
+template <class Model>
+typename Model::Meas measureModel(const Model& model, const typename Model::State& x,
+                                  const typename Model::Input& u, const typename Model::Param& theta) {
+  if constexpr (measurementTakesInput<Model>) {
+    return model.measurement(x, u, theta);
+  } else {
+    static_cast<void>(u);
+    return model.measurement(x, theta);
+  }
 }
 
 /// \cond INTERNAL

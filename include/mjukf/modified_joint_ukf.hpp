@@ -139,13 +139,13 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   Vector propagateMean(const Step& step, const Vector& mean) {
     return step.propagate(parameters_, mean);
   }
-  // Yᵢ = g(χᵢ⁺, θᵢ); points drawn afresh are paired with the θᵢ in order.
-  void measurePoints(const Model& model, const Points& points, MeasPoints& measured) {
-    for (int i = 0; i < Count; ++i) measured.col(i) = model.measurement(points.col(i), parameterPoints_.col(i));
+  // Yᵢ = g(χᵢ⁺, u, θᵢ); points drawn afresh are paired with the θᵢ in order.
+  void measurePoints(const Model& model, const typename Base::Input& u, const Points& points, MeasPoints& measured) {
+    for (int i = 0; i < Count; ++i) measured.col(i) = measureModel(model, points.col(i), u, parameterPoints_.col(i));
   }
   template <class Engine>
-  Status update(Engine& engine, const Meas& y, const Mask* present) {
-    return engine.correctState(y, present);
+  Status update(Engine& engine, const Meas& y, const typename Base::Input& u, const Mask* present) {
+    return engine.correctState(y, u, present);
   }
 
   // Eqs. 9–10 into the candidates, from the Yᵢ of the state's correction:
@@ -155,7 +155,7 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
     const Settings& s = c.settings;
     if (automatic_) {
       const Scalar memory = s.adaptiveScaling ? s.convergenceTime : std::numeric_limits<Scalar>::infinity();
-      const auto measure = [&c](const State& x, const Param& theta) { return c.model.measurement(x, theta); };
+      const auto measure = [&c](const State& x, const Param& theta) { return measureModel(c.model, x, c.input, theta); };
       if (!sensitivity_.correct(c.priorMean, parameters_, measure, c.gainFactor, c.innovationFactor, memory, c.present))
         return Status::NonFiniteResult;
     }

@@ -50,13 +50,14 @@ class KnownParameters : public ParameterPolicy<Model, Integrator, Settings, Est>
   Vector propagateMean(const Step& step, const Vector& mean) {
     return step.propagate(parameters_, mean);
   }
-  // Yᵢ = g(χᵢ⁺, θ)
-  void measurePoints(const Model& model, const Points& points, MeasPoints& measured) {
-    for (int i = 0; i < Base::Count; ++i) measured.col(i) = model.measurement(points.col(i), parameters_);
+  // Yᵢ = g(χᵢ⁺, u, θ)
+  void measurePoints(const Model& model, const typename Base::Input& u, const Points& points, MeasPoints& measured) {
+    for (int i = 0; i < Base::Count; ++i) measured.col(i) = measureModel(model, points.col(i), u, parameters_);
   }
   template <class Engine>
-  Status update(Engine& engine, const typename Base::Meas& y, const typename Base::Mask* present) {
-    return engine.correctState(y, present);
+  Status update(Engine& engine, const typename Base::Meas& y, const typename Base::Input& u,
+                const typename Base::Mask* present) {
+    return engine.correctState(y, u, present);
   }
   Status correctParameters(const typename Base::CorrectionOf&) { return Status::Ok; }
   void constrainMean(Vector&) {}

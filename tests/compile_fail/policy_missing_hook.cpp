@@ -40,12 +40,12 @@ struct Policy : mjukf::detail::ParameterPolicy<Plant, Integrator, Settings, Est>
   Est::Vector propagateMean(const Step& step, const Est::Vector& mean) {
     return step.propagate(theta, mean);
   }
-  void measurePoints(const Plant& model, const Est::Points& points, Est::MeasPoints& measured) {
+  void measurePoints(const Plant& model, const Plant::Input&, const Est::Points& points, Est::MeasPoints& measured) {
     for (int i = 0; i < Est::Count; ++i) measured.col(i) = model.measurement(points.col(i), theta);
   }
   template <class Engine>
-  mjukf::Status update(Engine& engine, const Plant::Meas& y, const Est::Mask* present) {
-    return engine.correctState(y, present);
+  mjukf::Status update(Engine& engine, const Plant::Meas& y, const Plant::Input& u, const Est::Mask* present) {
+    return engine.correctState(y, u, present);
   }
   mjukf::Status correctParameters(const mjukf::detail::Correction<Plant, Settings, Est>&) { return mjukf::Status::Ok; }
   void constrainMean(Est::Vector&) {}

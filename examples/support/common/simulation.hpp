@@ -60,6 +60,15 @@ double noiseStandardDeviation(const std::vector<State>& states, double snrDb) {
   return std::sqrt(squares / count / std::pow(10.0, snrDb / 10));
 }
 
+/// The input of the plant at time t: its signal u(t), or the empty input of a plant without one.
+template <class Model>
+typename Model::Input inputAt(const Model& model, double t) {
+  if constexpr (hasInputSignal<Model>)
+    return model.input(typename Model::Scalar(t));
+  else
+    return typename Model::Input();
+}
+
 /// The noise draws depend on `options.seed` alone (one standard normal per component and row, in
 /// row order), so a run is reproduced from its seed.
 template <class Model, class Integrator = ITrBdf2<double>>
@@ -91,7 +100,7 @@ PlantData<Model> simulatePlant(const Model& model, const SimulationOptions<Model
   std::normal_distribution<double> noise(0.0, 1.0);
   data.y.resize(static_cast<std::size_t>(rows));
   for (std::size_t k = 0; k < data.y.size(); ++k) {
-    data.y[k] = model.measurement(data.stateTruth[k], data.parameterTruth[k]);
+    data.y[k] = measureModel(model, data.stateTruth[k], inputAt(model, static_cast<double>(k) * h), data.parameterTruth[k]);
     for (int c = 0; c < Model::MeasDim; ++c)
       data.y[k](c) += (relative ? options.relativeNoise * std::abs(data.y[k](c)) : sigma) * noise(random);
   }

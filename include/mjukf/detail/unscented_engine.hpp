@@ -672,13 +672,14 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
 };
 
 // What a measurement update hands the parameter policy once the state's correction succeeded: the
-// measurement, which components are present, the points' images Yᵢ, the prior mean, and the gain's
+// measurement, its input, which components are present, the points' images Yᵢ, the prior mean, and the gain's
 // factors U = P_xy S⁻ᵀ and S (P_yy = S Sᵀ).
 template <class Model, class Settings, class Est>
 struct Correction {
   const Model& model;
   const Settings& settings;
   const typename Est::MeasVector& y;
+  const typename Model::Input& input;  // in force at the measurement time
   const typename Est::Mask* present;
   const typename Est::MeasPoints& measured;
   const typename Est::Vector& priorMean;
@@ -696,8 +697,10 @@ struct Correction {
 //   template <class Step> Status predictParameters(const Step&, const Est& state);   before the state's points
 //   template <class Step> void propagatePoints(const Step&, Points& points);          χᵢ⁺ = Φ(χᵢ), in place
 //   template <class Step> Vector propagateMean(const Step&, const Vector& mean);      the open-loop mean
-//   void measurePoints(const Model&, const Points& points, MeasPoints& measured);      Yᵢ = g(χᵢ)
-//   template <class Engine> Status update(Engine&, const Meas& y, const Mask* present);  the order of
+//   void measurePoints(const Model&, const Input& u, const Points& points, MeasPoints& measured);
+//                                                    Yᵢ = g(χᵢ, u)
+//   template <class Engine> Status update(Engine&, const Meas& y, const Input& u, const Mask* present);
+//                                                    the order of
 //                                                    the measurement update (Engine::correctState, or the
 //                                                    dual's: parameters first)
 //   Status correctParameters(const Correction&);      after the state's correction, into candidates
@@ -720,6 +723,7 @@ MJUKF_POLICY_HAS(propagateMean,
                                                   std::declval<const typename P::CheckEstimate::Vector&>()))
 MJUKF_POLICY_HAS(measurePoints,
                  std::declval<P&>().measurePoints(std::declval<const typename P::CheckModel&>(),
+                                                  std::declval<const typename P::CheckModel::Input&>(),
                                                   std::declval<const typename P::CheckEstimate::Points&>(),
                                                   std::declval<typename P::CheckEstimate::MeasPoints&>()))
 MJUKF_POLICY_HAS(correctParameters,
@@ -742,7 +746,7 @@ constexpr bool checkParameterPolicy() {
   static_assert(PolicyHas_propagateMean<Policy>::value,
                 "parameter policy: missing member propagateMean(const Step&, const Vector&) -> Vector");
   static_assert(PolicyHas_measurePoints<Policy>::value,
-                "parameter policy: missing member measurePoints(const Model&, const Points&, MeasPoints&)");
+                "parameter policy: missing member measurePoints(const Model&, const Input&, const Points&, MeasPoints&)");
   static_assert(PolicyHas_correctParameters<Policy>::value,
                 "parameter policy: missing member correctParameters(const Correction&) -> Status");
   static_assert(PolicyHas_constrainMean<Policy>::value, "parameter policy: missing member constrainMean(Vector&)");
@@ -870,12 +874,40 @@ class UnscentedEngine {
   /// update since the last update or open-loop propagation), it draws them from the current mean and
   /// covariance. Returns Ok or Repaired when the update was committed (the covariance is symmetrised
   /// and checked before it is), MeasurementRejected when the gate refused it, or another refusal.
-  Status measurementUpdate(const Meas& y) { return update(y, nullptr); }
+  ///
+  /// When the model's measurement depends on the input (`measurementTakesInput`, model.hpp), the input
+  /// is the model's `input(t)` at the filter's time, `time()`; a model without `input(t)` must be given
+  /// it, `measurementUpdate(y, u)`. A non-finite input is refused (NonFiniteInput).
+  template <class M = Model>
+  Status measurementUpdate(const Meas& y) {
+    return updateWithOwnInput<M>(y, nullptr);
+  }
 
   /// Measurement update with only the components where `present` is true (missing channels; the
   /// others, NaN included, are ignored): exactly the update of the model reduced to those components,
   /// with R reduced likewise. A mask with nothing present leaves the estimate as it was.
-  Status measurementUpdate(const Meas& y, const MeasurementMask<MeasDim>& present) { return update(y, &present); }
+  template <class M = Model>
+  Status measurementUpdate(const Meas& y, const MeasurementMask<MeasDim>& present) {
+    return updateWithOwnInput<M>(y, &present);
+  }
+
+  /// Measurement update of a model whose measurement depends on the input, y = g(x, u, θ), with the
+  /// input u in force at the measurement time.
+  template <class M = Model, std::enable_if_t<measurementTakesInput<M>, int> = 0>
+  Status measurementUpdate(const Meas& y, const Input& u) {
+    return updateWithInput(y, u, nullptr);
+  }
+
+  /// The masked measurement update with the input u in force at the measurement time.
+  template <class M = Model, std::enable_if_t<measurementTakesInput<M>, int> = 0>
+  Status measurementUpdate(const Meas& y, const Input& u, const MeasurementMask<MeasDim>& present) {
+    return updateWithInput(y, u, &present);
+  }
+
+  /// The filter's time: where its last committed time update or open-loop propagation ended (t + steps·h),
+  /// 0 before the first. A measurement that depends on the input is evaluated with the model's
+  /// `input(time())`.
+  Scalar time() const { return time_; }
 
   /// The filter built from these initial values and settings, or the SettingsError naming the first
   /// invalid one (Filter::validate): the way to build a filter without exceptions (docs/embedded.md).
@@ -970,6 +1002,7 @@ class UnscentedEngine {
     policy_.constrainMean(estimate_.candidateMean());
     estimate_.commitPrediction();
     policy_.commitPrediction();
+    time_ = t + step.interval();
     return combineTaken(settled, parameters);
   }
 
@@ -993,35 +1026,52 @@ class UnscentedEngine {
     if (!allFinite(mean)) return Status::NonFiniteResult;
     estimate_.commitMean(mean);
     policy_.commitOpenLoop(step.interval());
+    time_ = t + step.interval();
     return Status::Ok;
+  }
+
+  // The measurement update with the input the filter finds itself: none needed, or the model's u(t) at
+  // the filter's time.
+  template <class M>
+  Status updateWithOwnInput(const Meas& y, const Mask* present) {
+    if constexpr (measurementTakesInput<M>) {
+      static_assert(hasInputSignal<M>,
+                    "this model's measurement depends on the input and it has no input(t): pass the input, "
+                    "measurementUpdate(y, u)");
+      return updateWithInput(y, model_.input(time_), present);
+    } else {
+      return updateWithInput(y, noInput_, present);
+    }
   }
 
   // The measurement update: the policy says in which order its parts run (every filter but the dual
   // one calls correctState).
-  Status update(const Meas& y, const Mask* present) {
+  Status updateWithInput(const Meas& y, const Input& u, const Mask* present) {
     if (!presentComponentsFinite(y, present)) return Status::NonFiniteMeasurement;
-    return policy_.update(static_cast<Filter&>(*this), y, present);
+    if (!allFinite(u)) return Status::NonFiniteInput;
+    return policy_.update(static_cast<Filter&>(*this), y, u, present);
   }
 
   // §3 about the committed estimate, from the points of the last time update (or points drawn now).
-  Status correctState(const Meas& y, const Mask* present) {
+  Status correctState(const Meas& y, const Input& u, const Mask* present) {
     const bool drawPoints = settings_.redrawPointsForUpdate || !estimate_.hasPoints();
     if (drawPoints)
       if (const Status s = estimate_.draw(estimate_.mean(), estimate_.factor()); s != Status::Ok) return s;
     return correctAndCommit(drawPoints ? estimate_.workPoints() : estimate_.points(), estimate_.prior(drawPoints), y,
-                            present);
+                            u, present);
   }
 
   // §3 from `points` about a prior, then the policy's parameter correction, then the checks and the
   // commit of both.
-  Status correctAndCommit(const Points& points, const typename Est::Prior& prior, const Meas& y, const Mask* present) {
-    policy_.measurePoints(model_, points, estimate_.measuredPoints());
+  Status correctAndCommit(const Points& points, const typename Est::Prior& prior, const Meas& y, const Input& u,
+                          const Mask* present) {
+    policy_.measurePoints(model_, u, points, estimate_.measuredPoints());
     if (const Status s = estimate_.correct(points, estimate_.measuredPoints(), prior, y, settings_.measurementNoise,
                                            present, settings_.gate);
         s != Status::Ok)
       return s;
     const Status parameters = policy_.correctParameters(
-        Correction<Model, Settings, Est>{model_, settings_, y, present, estimate_.measuredPoints(), prior.mean,
+        Correction<Model, Settings, Est>{model_, settings_, y, u, present, estimate_.measuredPoints(), prior.mean,
                                          estimate_.gainFactor(), estimate_.innovationFactor()});
     if (!taken(parameters)) return parameters;
     if (!allFinite(estimate_.candidateMean())) return Status::NonFiniteResult;
@@ -1038,6 +1088,7 @@ class UnscentedEngine {
   Settings settings_;
   Est estimate_;
   Policy policy_;
+  Scalar time_ = 0;  // where the last time update or open-loop propagation ended
 
  private:
   // The input of a model without one (InputDim = 0): an empty vector, held over every step.
