@@ -150,6 +150,26 @@ TEST(SettingsValidation, ModifiedJointSettings) {
       "transformation");
   expectModifiedRejected([](auto& s) { s.transformation(1, 1) = kNan; }, "transformation");
   expectModifiedRejected([](auto& s) { s.scaling = kNan; }, "scaling");
+  expectModifiedRejected([](auto& s) { s.scaling(1) = kNan; }, "scaling");  // one parameter's ξ
+  // Signed entries: the magnitudes of a row sum to 1, not the entries. A row of 0.6, −0.4 sums to 0.2
+  // and its magnitudes to 1 (accepted below); 0.6, −0.6 sums to 0 and its magnitudes to 1.2.
+  expectModifiedRejected(
+      [](auto& s) {
+        s.transformation.row(0).setZero();
+        s.transformation(0, 0) = 0.6;
+        s.transformation(0, 1) = -0.6;
+      },
+      "transformation");
+}
+
+TEST(SettingsValidation, ModifiedJointSignedTransformationAndPerParameterScalingAreAccepted) {
+  auto s = Robot::modifiedJointUkf();
+  s.transformation.row(0).setZero();
+  s.transformation(0, 0) = 0.6;
+  s.transformation(0, 1) = -0.4;
+  s.scaling << -0.002, 0.003;
+  EXPECT_FALSE(
+      mjukf::ModifiedJointUkf<Robot::Model>::validate(Robot::initialState(), Robot::initialParameters(), s));
   expectModifiedRejected([](auto& s) { s.parameterSpread(1) = std::numeric_limits<double>::infinity(); },
                          "parameterSpread");
 }

@@ -19,6 +19,33 @@
 
 namespace mjukf {
 
+/// ξ of eq. 9, one per parameter. Assigning one number gives every parameter that ξ (the paper's one
+/// scalar, `settings.scaling = -1`); a vector gives each its own (`settings.scaling << -0.5, 0.02`).
+template <class Scalar, int ParamDim>
+class ParameterScalings : public Eigen::Matrix<Scalar, ParamDim, 1> {
+  using Base = Eigen::Matrix<Scalar, ParamDim, 1>;
+
+ public:
+  /// ξ = 0 for every parameter.
+  ParameterScalings() : Base(Base::Zero()) {}
+  /// ξ for every parameter.
+  ParameterScalings(Scalar xi) : Base(Base::Constant(xi)) {}  // NOLINT: implicit, as the paper's scalar ξ
+  /// One ξ per parameter.
+  template <class Other>
+  ParameterScalings(const Eigen::MatrixBase<Other>& xi) : Base(xi) {}  // NOLINT: implicit, as a vector
+  /// ξ for every parameter.
+  ParameterScalings& operator=(Scalar xi) {
+    this->setConstant(xi);
+    return *this;
+  }
+  /// One ξ per parameter.
+  template <class Other>
+  ParameterScalings& operator=(const Eigen::MatrixBase<Other>& xi) {
+    Base::operator=(xi);
+    return *this;
+  }
+};
+
 /// Settings of `ModifiedJointUkf` over a model of `StateDim` states, `ParamDim` parameters and
 /// `MeasDim` measurements, validated at construction: P₀ and Q of the state x, and the parameter step
 /// of eqs. 8–9. Templated on the sizes, not the model; `ModifiedJointUkf<Model>::Settings` or
@@ -33,12 +60,15 @@ struct ModifiedJointUkfSettings : ParameterEstimationSettings<Scalar_, StateDim,
   using Param = Eigen::Matrix<Scalar, ParamDim, 1>;
   /// The type of T (p × m).
   using Transformation = Eigen::Matrix<Scalar, ParamDim, MeasDim>;
-  /// ξ, the scaling parameter of eq. 9, θᵢ ← θ̂ − ξ T (y − Yᵢ). Sign: θ̂ approaches the truth when
-  /// ξ (T ψ)ᵣᵣ < 0 for each parameter r, ψ = ∂ŷ/∂θ̂ through the dynamics; with T ≥ 0, ξ is negative
-  /// when the measurements rise with the parameter (the tank's ∂y/∂k_flow > 0 takes ξ = −1; ξ = +1
-  /// diverges). Too large diverges, too small converges slowly (docs/tuning-mjukf.md).
-  Scalar scaling = 0;
-  /// T of eq. 9 (p × m): how much each measurement's error moves each parameter. Each row sums to 1.
+  /// ξ of eq. 9, one per parameter: θᵢ ← θ̂ − diag(ξ) T (y − Yᵢ). One number sets every parameter's
+  /// (the paper's scalar ξ). Sign: θ̂ᵣ approaches the truth when ξᵣ (T ψ)ᵣᵣ < 0, ψ = ∂ŷ/∂θ̂ through the
+  /// dynamics; with a row of T ≥ 0, ξᵣ is negative when the measurements rise with the parameter (the
+  /// tank's ∂y/∂k_flow > 0 takes ξ = −1; ξ = +1 diverges). Too large diverges, too small converges
+  /// slowly (docs/tuning-mjukf.md).
+  ParameterScalings<Scalar, ParamDim> scaling;
+  /// T of eq. 9 (p × m): how much of each measurement's error moves each parameter, and in which
+  /// direction. Each row has Σⱼ |tᵣⱼ| = 1 (eq. 14 with signed entries): T only distributes, ξ sets the
+  /// size; a row of entries ≥ 0 sums to 1 as in the paper.
   Transformation transformation = Transformation::Zero();
   /// p_θ of eq. 8: the spacing of the initial per-point parameters θᵢ around θ̂₀.
   Param parameterSpread = Param::Zero();
@@ -167,7 +197,7 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
     if (s.adaptiveScaling)
       sensitivity_.scaling(candidateTransformation_, c.innovationFactor, candidateScalings_);
     else
-      candidateScalings_.setConstant(s.scaling);
+      candidateScalings_ = s.scaling;
 
     for (int i = 0; i < Count; ++i) {  // y − Yᵢ; a missing y(j) may be NaN: overwrite, never multiply by 0
       errors_.col(i) = c.y - c.measured.col(i);
@@ -175,12 +205,8 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
         for (int j = 0; j < MeasDim; ++j)
           if (!(*c.present)(j)) errors_(j, i) = Scalar(0);
     }
-    // Eq. 9 for every point at once, ξ T (y − Yᵢ): the paper's one ξ scales T, the automatic ones scale
-    // each parameter's row of T (y − Yᵢ).
-    if (s.adaptiveScaling)
-      steps_.noalias() = candidateScalings_.asDiagonal() * candidateTransformation_.lazyProduct(errors_);
-    else
-      steps_.noalias() = (s.scaling * candidateTransformation_).lazyProduct(errors_);
+    // Eq. 9 for every point at once, diag(ξ) T (y − Yᵢ): each parameter's ξ scales its row of T.
+    steps_.noalias() = (candidateScalings_.asDiagonal() * candidateTransformation_).lazyProduct(errors_);
     for (int i = 0; i < Count; ++i) {
       candidateParameterPoints_.col(i) = parameters_ - steps_.col(i);
       if (boundsActive_) s.parameterBounds.clamp(candidateParameterPoints_.col(i));
@@ -209,13 +235,13 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   }
 
  private:
-  // T with the columns of missing components zeroed and each row rescaled to sum to 1 (eq. 14).
+  // T with the columns of missing components zeroed and each row rescaled to Σⱼ |tᵣⱼ| = 1 (eq. 14).
   void reduceToPresent(const MeasurementMask<MeasDim>& present) {
     const Transformation t = candidateTransformation_;
     for (int r = 0; r < ParamDim; ++r) {
       Scalar sum = 0;
       for (int j = 0; j < MeasDim; ++j)
-        if (present(j)) sum += t(r, j);
+        if (present(j)) sum += std::abs(t(r, j));
       for (int j = 0; j < MeasDim; ++j)
         candidateTransformation_(r, j) = present(j) && sum != Scalar(0) ? t(r, j) / sum : Scalar(0);
     }
@@ -255,8 +281,8 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
 ///
 ///     θᵢ ← θ̂ − ξ T (y − Yᵢ),   θ̂ ← (1 / (2n + 1)) Σ θᵢ
 ///
-/// with Yᵢ = g(χᵢ⁺, θᵢ) and θ̂ the estimate before this update. A masked update reduces T to the columns
-/// present, each row rescaled to sum to 1 again (eq. 14); a row with no weight on any present
+/// with Yᵢ = g(χᵢ⁺, θᵢ), θ̂ the estimate before this update and one ξ per parameter (diag(ξ) T). A masked
+/// update reduces T to the columns present, each row rescaled to Σⱼ |tᵣⱼ| = 1 again (eq. 14); a row with no weight on any present
 /// component leaves its parameter at θ̂. The settings `automaticTransformation` and `adaptiveScaling`
 /// set T and one ξ per parameter from the sensitivities instead, for p more propagations per time
 /// update (parameter_sensitivity.hpp, docs/tuning-mjukf.md).
@@ -308,13 +334,13 @@ class ModifiedJointUkf
     if (settings.adaptiveScaling && !(std::isfinite(settings.convergenceTime) && settings.convergenceTime > 0))
       return detail::invalid(kOwner, "convergenceTime", "must be finite and > 0 (seconds)");
     if (settings.sensitivityInterval < 0) return detail::invalid(kOwner, "sensitivityInterval", "must be >= 0");
-    // The rows of T sum to 1 (paper eq. 14): T only distributes the error, ξ sets its scale. A T that
-    // does not is almost always a typo or a transposed matrix. (With automaticTransformation, T is the
-    // filter's.)
-    const auto rowSums = settings.transformation.rowwise().sum();
+    // Each row of T has Σⱼ |tᵣⱼ| = 1 (paper eq. 14, with signed entries): T only distributes the error
+    // and its direction, ξ sets its scale. A T that does not is almost always a typo or a transposed
+    // matrix. (With automaticTransformation, T is the filter's.)
+    const auto rowSums = settings.transformation.cwiseAbs().rowwise().sum();
     const Scalar tolerance = Scalar(1000) * Eigen::NumTraits<Scalar>::epsilon() * Scalar(MeasDim);
     if (!settings.automaticTransformation && (rowSums.array() - Scalar(1)).abs().maxCoeff() > tolerance)
-      return detail::invalid(kOwner, "transformation (T)", "must have rows that each sum to 1");
+      return detail::invalid(kOwner, "transformation (T)", "must have rows whose magnitudes each sum to 1");
     return Engine::validateSettings(kOwner, settings);
   }
 
@@ -335,7 +361,7 @@ class ModifiedJointUkf
   /// ξ of the last measurement update, per parameter (with `adaptiveScaling`; zero before the first
   /// update), else the setting for every parameter.
   Param scalings() const {
-    return this->settings_.adaptiveScaling ? this->policy_.lastScalings() : Param::Constant(this->settings_.scaling);
+    return this->settings_.adaptiveScaling ? this->policy_.lastScalings() : Param(this->settings_.scaling);
   }
   /// What the automatic modes know (W = ∂x̂/∂θ̂, ψ = ∂ŷ/∂θ̂ of the last update, the information about
   /// θ); not followed, and zero, when neither mode is on.

@@ -138,7 +138,13 @@ FilterSetup<Experiment> filterSetup(const Arguments& args) {
   } else {
     auto& s = setup.modifiedJointUkf;
     overrideCovariances(args, s);
-    s.scaling = args.number("--xi", s.scaling);
+    if (args.has("--xi")) {  // one ξ for every parameter, or one per parameter
+      const std::string text = args.text("--xi");
+      if (text.find(',') == std::string::npos)
+        s.scaling = args.number("--xi", 0.0);
+      else
+        overrideVector(args, "--xi", s.scaling);
+    }
     overrideVector(args, "--p-theta", s.parameterSpread);
     if (args.has("--transform")) {
       const auto values = args.numbers("--transform", static_cast<std::size_t>(s.transformation.size()));
