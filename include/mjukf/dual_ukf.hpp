@@ -46,9 +46,10 @@ struct DualUkfSettings : ParameterEstimationSettings<Scalar_, StateDim, MeasDim,
   ParamMatrix initialParameterCovariance = ParamMatrix::Zero();
   /// Q_θ of the parameters' random walk, symmetric positive semi-definite.
   ParamMatrix parameterProcessNoise = ParamMatrix::Zero();
-  /// Added to R in the parameter filter's correction: the uncertainty of its observation that R leaves
-  /// out, chiefly that of the state estimate x̂_{k−1} it propagates (docs/algorithms.md §9). Symmetric
-  /// positive semi-definite; zero (the default) observes with R alone.
+  /// Added to the parameter filter's observation noise, which is the state filter's predicted
+  /// innovation covariance H P⁻ Hᵀ + R (the state's uncertainty and the sensor's; docs/algorithms.md §9):
+  /// any further uncertainty of the observation, e.g. a known model error. Symmetric positive
+  /// semi-definite; zero (the default) adds nothing.
   MeasMatrix parameterObservationNoise = MeasMatrix::Zero();
   /// λ ∈ (0, 1] of the parameter time update P^θ⁻ = P^θ / λ + Q_θ; 1 is none (van der Merwe's
   /// forgetting factor is the alternative to Q_θ).
@@ -61,11 +62,13 @@ struct DualUkfSettings : ParameterEstimationSettings<Scalar_, StateDim, MeasDim,
 namespace detail {
 
 /// The parameter policy of `DualUkf` (docs/algorithms.md §9): a second unscented estimate, of θ, with a
-/// random-walk time update, whose sigma points θⱼ are measured through the state filter's prediction,
-/// Dⱼ = g(Φ_h(x̂_{k−1}; θⱼ), θⱼ). Its measurement update corrects the parameters first, then the state
-/// (with the UpdatedParameters ordering, after predicting the state's last step again with the
-/// corrected θ̂); the engine commits both or neither. detail/unscented_engine.hpp §3 lists what a
-/// policy supplies.
+/// random-walk time update, whose sigma points θⱼ are measured through the state filter's prediction
+/// from the state the filter would hold had θ been θⱼ all along,
+///     Dⱼ = g(Φ_h(x̂_{k−1} + W (θⱼ − θ̂); θⱼ), u, θⱼ),   W = ∂x̂/∂θ̂ (the recurrent sensitivity),
+/// observed with the state filter's innovation covariance H P⁻ Hᵀ + R. Its measurement update corrects
+/// the parameters first, then the state (with the UpdatedParameters ordering, after predicting the
+/// state's last step again with the corrected θ̂); the engine commits both or neither.
+/// detail/unscented_engine.hpp §3 lists what a policy supplies.
 template <class Model, class Integrator, class Settings, class Est>
 class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> {
   using Base = ParameterPolicy<Model, Integrator, Settings, Est>;
@@ -79,25 +82,34 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
   using ParameterEstimate = Estimate<Scalar, ParamDim, MeasDim, typename Est::PointSetType, typename Est::FormType>;
   static constexpr int ParameterCount = ParameterEstimate::Count;
 
+  /// W = ∂x̂/∂θ̂ (n × p).
+  using Sensitivity = Eigen::Matrix<Scalar, StateDim, ParamDim>;
+
   DualParameters(const Settings& s, const Param& initialParameters)
       : estimate_(Validated{}, s.parameterSigmaPoints, s.parameterProcessNoise,
                   s.measurementNoise + s.parameterObservationNoise),
-        observationNoise_(s.measurementNoise + s.parameterObservationNoise),
         boundsActive_(s.parameterBounds.active()),
         storesStep_(s.ordering == DualUkfOrdering::UpdatedParameters) {
     estimate_.assign(initialParameters, s.initialParameterCovariance);  // checked in validate()
   }
 
   const ParameterEstimate& estimate() const { return estimate_; }
+  const Sensitivity& sensitivity() const { return sensitivity_; }
   // Starts the parameter filter again (both arguments checked by the filter's reset()).
   void reset(const Param& parameters, const Eigen::Matrix<Scalar, ParamDim, ParamDim>& covariance) {
     estimate_.assign(parameters, covariance);
+    restartState();
+  }
+  // A state estimate that does not depend on θ̂: W = 0.
+  void restartState() {
+    sensitivity_.setZero();
+    openLoopTime_ = Scalar(0);
     hasPrior_ = false;
   }
 
   // The parameter time update, θ̂⁻ = θ̂, P^θ⁻ = P^θ / λ + Q_θ (square-root form: S^θ⁻ from
-  // [S^θ / √λ | G_θ] by Householder), and the propagation of x̂_{k−1} with each θⱼ of (θ̂⁻, P^θ⁻) over
-  // the step, into the candidates.
+  // [S^θ / √λ | G_θ] by Householder), and the propagation of x̂_{k−1} + W (θⱼ − θ̂) with each θⱼ of
+  // (θ̂⁻, P^θ⁻) over the step, into the candidates; then W⁻ = ∂Φ/∂θ̂ of those propagations.
   template <class Step>
   Status predictParameters(const Step& step, const Est& state) {
     const Settings& s = step.settings;
@@ -106,11 +118,20 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
     const Status settled = pe.settle(s.repair);
     if (!taken(settled)) return settled;
     if (const Status drawn = pe.draw(pe.candidateMean(), pe.candidateFactor()); drawn != Status::Ok) return drawn;
+    const Param& center = pe.candidateMean();
     for (int j = 0; j < ParameterCount; ++j) {
       const Param theta = pe.workPoints().col(j);
-      candidatePropagatedStates_.col(j) = step.propagate(theta, state.mean());
+      candidatePropagatedStates_.col(j) = step.propagate(theta, State(state.mean() + sensitivity_ * (theta - center)));
     }
     if (!allFinite(candidatePropagatedStates_)) return Status::NonFiniteResult;
+    // W⁻ = A W + B over this step, by the statistical linear regression of the propagations on the θⱼ;
+    // the change over the open-loop steps since the last time update (the mean alone was propagated
+    // there) is extrapolated from it, first-order right when they are short against the dynamics.
+    regressOnParameters(candidatePropagatedStates_, pe.workPoints(), center, pe.candidateFactor(),
+                        candidatePredictedSensitivity_);
+    const Scalar extrapolation = (openLoopTime_ + step.interval()) / step.interval();
+    candidatePredictedSensitivity_ = sensitivity_ + extrapolation * (candidatePredictedSensitivity_ - sensitivity_);
+    if (!allFinite(candidatePredictedSensitivity_)) return Status::NonFiniteResult;
     if (s.ordering == DualUkfOrdering::UpdatedParameters) {
       constexpr bool held = std::is_same_v<typename Step::InputType, HeldInput<Model>>;
       candidatePriorMean_ = state.mean();
@@ -143,9 +164,9 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
   // both (commitCorrection) or neither.
   template <class Engine>
   Status update(Engine& engine, const Meas& y, const Input& u, const Mask* present) {
-    const Status parameters =
-        correctParameterFilter(engine.model(), engine.settings(), engine.state(), y, u, present);
+    const Status parameters = correctParameterFilter(engine, y, u, present);
     if (!taken(parameters)) return parameters;
+    correcting_ = true;
     Status state;
     if (engine.settings().ordering == DualUkfOrdering::UpdatedParameters && hasPrior_) {
       useCorrectedParameters_ = true;
@@ -164,13 +185,29 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
     } else {
       state = engine.correctState(y, u, present);
     }
+    correcting_ = false;
     return taken(state) ? combineTaken(state, parameters) : state;
   }
-  Status correctParameters(const typename Base::CorrectionOf&) { return Status::Ok; }
-  void constrainMean(Vector&) {}
+  // After the state's correction x̂ = x̂⁻ + K (y − ŷ): W = W⁻ − K ψ, ψ = ∂ŷ/∂θ̂ (K = U S⁻¹).
+  Status correctParameters(const typename Base::CorrectionOf& c) {
+    whitenedSensitivity_ = measurementSensitivity_;
+    solveLowerInPlace(c.innovationFactor, whitenedSensitivity_);
+    candidateSensitivity_ = priorSensitivity();
+    candidateSensitivity_.noalias() -= c.gainFactor * whitenedSensitivity_;
+    return allFinite(candidateSensitivity_) ? Status::Ok : Status::NonFiniteResult;
+  }
+  // x̂ is the state's estimate given θ̂ (its mean conditional on θ̂, which moves with θ̂ by W): a
+  // correction that moved θ̂ by Δ moves x̂ by W Δ, so that x̂ stays the estimate given the θ̂ it is
+  // committed with (the UpdatedParameters ordering moves x̂_{k−1} before predicting again instead).
+  void constrainMean(Vector& mean) {
+    if (correcting_ && !useCorrectedParameters_)
+      mean.noalias() += candidateSensitivity_ * (estimate_.candidateMean() - estimate_.mean());
+  }
 
   void commitPrediction() {
     estimate_.commitPrediction();
+    predictedSensitivity_ = candidatePredictedSensitivity_;
+    openLoopTime_ = Scalar(0);
     propagatedStates_ = candidatePropagatedStates_;
     if (storesStep_) {
       priorMean_ = candidatePriorMean_;
@@ -181,10 +218,12 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
   }
   void commitCorrection() {
     estimate_.commitCorrection();
+    sensitivity_ = candidateSensitivity_;
     hasPrior_ = false;
   }
-  void commitOpenLoop(Scalar) {
+  void commitOpenLoop(Scalar interval) {
     estimate_.commitMean(estimate_.mean());  // its θⱼ were propagated from an x̂ that moved on
+    openLoopTime_ += interval;
     hasPrior_ = false;
   }
 
@@ -206,18 +245,48 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
     return useCorrectedParameters_ ? estimate_.candidateMean() : estimate_.mean();
   }
 
-  // §3 for the parameter filter (R + parameterObservationNoise as the observation noise; no gate: the
-  // state's gate decides), into its candidates, with bounds applied; committed with the state's
-  // correction.
-  Status correctParameterFilter(const Model& model, const Settings& s, const State& state, const Meas& y,
-                                const Input& u, const Mask* present) {
+  // W⁻ of the last time update, or W when the parameter filter's points were not propagated since.
+  const Sensitivity& priorSensitivity() const { return estimate_.hasPoints() ? predictedSensitivity_ : sensitivity_; }
+
+  // ∂z/∂θ (rows × p) by the statistical linear regression of the images zⱼ of the θⱼ of (center, S Sᵀ):
+  // Σ Wcⱼ (zⱼ − z̄)(θⱼ − center)ᵀ P⁻¹, exact for z linear in θ.
+  template <class Images, class Out>
+  void regressOnParameters(const Images& images, const typename ParameterEstimate::Points& thetas,
+                           const Param& center, const typename ParameterEstimate::Matrix& lowerFactor, Out& out) {
+    const auto& set = estimate_.sigmaPoints();
+    Eigen::Matrix<Scalar, Out::RowsAtCompileTime, 1> mean;
+    weightedMean(images, set.meanWeights(), mean);
+    parameterDeviations_.noalias() = thetas.colwise() - center;
+    Eigen::Matrix<Scalar, ParamDim, Out::RowsAtCompileTime> transposed;
+    weightedOuterSum(parameterDeviations_, images.colwise() - mean, set.covarianceWeights(), transposed);
+    solveLowerInPlace(lowerFactor, transposed);  // P⁻¹ Σ … = S⁻ᵀ S⁻¹ Σ …
+    solveUpperInPlace(lowerFactor, transposed);
+    out = transposed.transpose();
+  }
+
+  // §3 for the parameter filter (no gate: the state's gate decides), into its candidates, with bounds
+  // applied; committed with the state's correction. It observes y through the state filter's prediction,
+  // whose innovation covariance H P⁻ Hᵀ + R (the uncertainty of x̂⁻ that its Dⱼ take as known, and the
+  // sensor's) is its observation noise, plus parameterObservationNoise.
+  template <class Engine>
+  Status correctParameterFilter(Engine& engine, const Meas& y, const Input& u, const Mask* present) {
+    const Model& model = engine.model();
+    const Settings& s = engine.settings();
     ParameterEstimate& pe = estimate_;
+    if (const Status st = stateInnovationCovariance(engine, u); st != Status::Ok) return st;
+    observationNoise_ += s.parameterObservationNoise;
+    if (!pe.useMeasurementNoise(observationNoise_)) return Status::InnovationNotPositiveDefinite;
     const bool drawn = !pe.hasPoints();
     if (drawn)
       if (const Status st = pe.draw(pe.mean(), pe.factor()); st != Status::Ok) return st;
     const auto& thetas = drawn ? pe.workPoints() : pe.points();
-    for (int j = 0; j < ParameterCount; ++j)  // Dⱼ = g(Φ_h(x̂_{k−1}; θⱼ), u, θⱼ)
-      pe.measuredPoints().col(j) = measureModel(model, drawn ? state : State(propagatedStates_.col(j)), u, thetas.col(j));
+    const Param& center = pe.mean();  // θ̂⁻ after a time update: the θⱼ were drawn about it
+    for (int j = 0; j < ParameterCount; ++j)  // Dⱼ = g(Φ_h(x̂_{k−1} + W (θⱼ − θ̂); θⱼ), u, θⱼ)
+      pe.measuredPoints().col(j) = measureModel(
+          model, drawn ? State(engine.state() + sensitivity_ * (thetas.col(j) - center)) : State(propagatedStates_.col(j)),
+          u, thetas.col(j));
+    if (!allFinite(pe.measuredPoints())) return Status::NonFiniteResult;
+    regressOnParameters(pe.measuredPoints(), thetas, center, pe.factor(), measurementSensitivity_);  // ψ = ∂ŷ/∂θ̂
     if (const Status st =
             pe.correct(thetas, pe.measuredPoints(), pe.prior(drawn), y, observationNoise_, present, noGate_);
         st != Status::Ok)
@@ -241,7 +310,7 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
         const SharedSignalInput<Model> input(engine.model());
         const TimeStep<Model, Integrator, SharedSignalInput<Model>, Settings_> step{
             engine.model(), engine.integrator(), engine.settings(), input, step_.t, step_.h, step_.steps};
-        settled = engine.predict(step, priorMean_, priorFactor_);
+        settled = engine.predict(step, shiftedPriorMean(), priorFactor_);
       } else {
         settled = predictAgainHeld(engine);
       }
@@ -253,26 +322,54 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
     repredictedCovariance_ = engine.estimate_.candidateCovariance();
     return settled;
   }
+  // x̂_{k−1} given the corrected θ̂_k: moved by W (θ̂_k − θ̂_{k−1}).
+  State shiftedPriorMean() const {
+    return priorMean_ + sensitivity_ * (estimate_.candidateMean() - estimate_.mean());
+  }
   template <class Engine>
   Status predictAgainHeld(Engine& engine) {
     const HeldInput<Model> input{step_.held};
     const TimeStep<Model, Integrator, HeldInput<Model>, typename Engine::Settings> step{
         engine.model(), engine.integrator(), engine.settings(), input, step_.t, step_.h, step_.steps};
-    return engine.predict(step, priorMean_, priorFactor_);
+    return engine.predict(step, shiftedPriorMean(), priorFactor_);
   }
 
-  ParameterEstimate estimate_;                                // θ̂, P^θ, the θⱼ
-  Eigen::Matrix<Scalar, MeasDim, MeasDim> observationNoise_;  // R + parameterObservationNoise
+  // observationNoise_ = the state filter's H P⁻ Hᵀ + R from its points of the coming correction, measured
+  // with the parameters it runs with.
+  template <class Engine>
+  Status stateInnovationCovariance(Engine& engine, const Input& u) {
+    auto& est = engine.estimate_;
+    const bool drawn = engine.settings().redrawPointsForUpdate || !est.hasPoints();
+    if (drawn)
+      if (const Status st = est.draw(est.mean(), est.factor()); st != Status::Ok) return st;
+    const Points& points = drawn ? est.workPoints() : est.points();
+    const Param& theta = stateFilterParameters();
+    for (int i = 0; i < Base::Count; ++i) stateMeasured_.col(i) = measureModel(engine.model(), points.col(i), u, theta);
+    if (!allFinite(stateMeasured_)) return Status::NonFiniteResult;
+    Meas mean;
+    weightedMean(stateMeasured_, est.sigmaPoints().meanWeights(), mean);
+    stateMeasured_.colwise() -= mean;
+    weightedOuterSum(stateMeasured_, stateMeasured_, est.sigmaPoints().covarianceWeights(), observationNoise_);
+    observationNoise_ += engine.settings().measurementNoise;
+    return Status::Ok;
+  }
+
+  ParameterEstimate estimate_;                                                // θ̂, P^θ, the θⱼ
+  Eigen::Matrix<Scalar, MeasDim, MeasDim> observationNoise_ = decltype(observationNoise_)::Zero();  // of this step
   bool boundsActive_;
   bool storesStep_;  // the UpdatedParameters ordering
   MeasurementGate<Scalar, MeasDim> noGate_;
-  PropagatedStates propagatedStates_ = PropagatedStates::Zero();  // Φ_h(x̂_{k−1}; θⱼ) of the last time update
+  PropagatedStates propagatedStates_ = PropagatedStates::Zero();  // Φ_h(x̂_{k−1} + W Δθⱼ; θⱼ), last time update
+  Sensitivity sensitivity_ = Sensitivity::Zero();           // W = ∂x̂/∂θ̂ after the last correction
+  Sensitivity predictedSensitivity_ = Sensitivity::Zero();  // W⁻ of the last time update
+  Scalar openLoopTime_ = 0;                                 // open-loop propagation since the last time update
   // The UpdatedParameters ordering: the state filter's prior of the last time update and its step.
   State priorMean_ = State::Zero();
   StateMatrix priorFactor_ = StateMatrix::Zero();
   StoredStep step_;
   bool hasPrior_ = false;
   bool useCorrectedParameters_ = false;
+  bool correcting_ = false;  // the state's correction of a measurement update is running
   // Workspace, committed only with the step that made it.
   PropagatedStates candidatePropagatedStates_ = PropagatedStates::Zero();
   State candidatePriorMean_ = State::Zero();
@@ -280,6 +377,12 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
   StoredStep candidateStep_;
   State repredictedMean_ = State::Zero();
   StateMatrix repredictedCovariance_ = StateMatrix::Zero();
+  Sensitivity candidatePredictedSensitivity_ = Sensitivity::Zero();
+  Sensitivity candidateSensitivity_ = Sensitivity::Zero();
+  Eigen::Matrix<Scalar, MeasDim, ParamDim> measurementSensitivity_ = decltype(measurementSensitivity_)::Zero();  // ψ
+  Eigen::Matrix<Scalar, MeasDim, ParamDim> whitenedSensitivity_ = decltype(whitenedSensitivity_)::Zero();
+  typename ParameterEstimate::Points parameterDeviations_ = ParameterEstimate::Points::Zero();
+  MeasPoints stateMeasured_ = MeasPoints::Zero();
 };
 
 }  // namespace detail

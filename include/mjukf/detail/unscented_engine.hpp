@@ -305,6 +305,16 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
   /// The points of the last time update, while they are still the estimate's (hasPoints()).
   const Points& points() const { return points_; }
   bool hasPoints() const { return hasPoints_; }
+  // The measurement noise of the next correct() when it is not the one given at construction (the dual
+  // filter's parameter filter observes through the state's uncertainty, which changes every step). The
+  // full form reads it from correct()'s argument; the square-root form factors it here. False when it
+  // has no Cholesky factor (the square-root form's factor is then unspecified until the next call).
+  bool useMeasurementNoise(const MeasMatrix& measurementNoise) {
+    if constexpr (SquareRoot)
+      return choleskyLower(measurementNoise, sr().measurementNoiseRoot);
+    else
+      return static_cast<void>(measurementNoise), true;
+  }
   const Diagnostics& diagnostics() const { return diagnostics_; }
   const SigmaPoints& sigmaPoints() const { return sigmaPoints_; }
   /// The committed estimate as the prior of a measurement update: of its own points() (`drawnNow`
