@@ -462,6 +462,12 @@ class DualUkf : public detail::EngineOf<
   const Param& parameters() const { return this->policy_.estimate().mean(); }
   /// P^θ, the parameter filter's covariance.
   const ParamMatrix& parameterCovariance() const { return this->policy_.estimate().covariance(); }
+  /// W = ∂x̂/∂θ̂ (n × p), the sensitivity of the state estimate to the parameters through the dynamics and
+  /// the state's corrections, after the last measurement update: the parameter filter propagates
+  /// x̂ + W (θⱼ − θ̂) with each of its θⱼ.
+  const Eigen::Matrix<Scalar, Engine::StateDim, Engine::ParamDim>& sensitivity() const {
+    return this->policy_.sensitivity();
+  }
   /// Innovation, its covariance and NIS of the parameter filter's last successful correction.
   const UpdateDiagnostics<Scalar, MeasDim>& lastParameterUpdate() const {
     return this->policy_.estimate().diagnostics();
