@@ -22,7 +22,7 @@ namespace mjukf {
 /// Settings of `ModifiedJointUkf` over a model of `StateDim` states, `ParamDim` parameters and
 /// `MeasDim` measurements, validated at construction: P₀ and Q of the state x, and the parameter step
 /// of eqs. 8–9. Templated on the sizes, not the model; `ModifiedJointUkf<Model>::Settings` or
-/// `ModifiedJointUkfSettingsFor<Model>` name it.
+/// `ModifiedJointUkfSettingsFor<Model>` name it. Every field: docs/settings.md §2, §3 and §6.
 template <class Scalar_, int StateDim, int ParamDim, int MeasDim>
 struct ModifiedJointUkfSettings : ParameterEstimationSettings<Scalar_, StateDim, MeasDim, ParamDim> {
   /// The floating-point type.
@@ -36,15 +36,20 @@ struct ModifiedJointUkfSettings : ParameterEstimationSettings<Scalar_, StateDim,
   /// ξ, the scaling parameter of eq. 9, θᵢ ← θ̂ − ξ T (y − Yᵢ). Sign: θ̂ approaches the truth when
   /// ξ (T ψ)ᵣᵣ < 0 for each parameter r, ψ = ∂ŷ/∂θ̂ through the dynamics; with T ≥ 0, ξ is negative
   /// when the measurements rise with the parameter (the tank's ∂y/∂k_flow > 0 takes ξ = −1; ξ = +1
-  /// diverges). Too large diverges, too small converges slowly (docs/tuning-mjukf.md).
+  /// diverges). Too large diverges, too small converges slowly (docs/tuning-mjukf.md). The default 0 is
+  /// accepted but leaves the parameters at θ̂₀: set it, or use `adaptiveScaling`.
   Scalar scaling = 0;
-  /// T of eq. 9 (p × m): how much each measurement's error moves each parameter. Each row sums to 1.
+  /// T of eq. 9 (p × m): how much each measurement's error moves each parameter. Each row sums to 1,
+  /// so the default (zero) is refused unless `automaticTransformation`.
   Transformation transformation = Transformation::Zero();
-  /// p_θ of eq. 8: the spacing of the initial per-point parameters θᵢ around θ̂₀.
+  /// p_θ of eq. 8: the spacing of the initial per-point parameters θᵢ, evenly over θ̂₀ ± n p_θ; zero (the
+  /// default) starts them all at θ̂₀. The automatic modes also take max(|θ̂₀|, (n + 1)|p_θ|) as each
+  /// parameter's prior scale.
   Param parameterSpread = Param::Zero();
-  /// true: T is computed by the filter from the sensitivities of the measurements to the parameters
-  /// through the dynamics (eqs. 14–15), refreshed at every time update, and `transformation` is not
-  /// used (docs/tuning-mjukf.md). false (the paper): `transformation` as given.
+  /// true: T is computed by the filter at every measurement update from the sensitivities of the
+  /// measurements to the parameters through the dynamics (eqs. 14–15; the sensitivities refreshed as
+  /// `sensitivityInterval` says), and `transformation` is not used (docs/tuning-mjukf.md). false (the
+  /// paper): `transformation` as given.
   bool automaticTransformation = false;
   /// true: ξ is set at every measurement update, for each parameter, from the sensitivities, the
   /// innovation covariance P_yy and the information gathered so far (a recursive least-squares gain,
@@ -58,6 +63,7 @@ struct ModifiedJointUkfSettings : ParameterEstimationSettings<Scalar_, StateDim,
   Scalar convergenceTime = Scalar(5);
   /// With either automatic mode: the sensitivities are recomputed at every `sensitivityInterval`-th
   /// time update (p extra propagations each) and kept in between; 0: once, at the first time update.
+  /// Must be ≥ 0, checked even with both modes off.
   int sensitivityInterval = 1;
 };
 
