@@ -20,12 +20,13 @@ namespace mjukf {
 /// With s = the mean of |Pᵢᵢ|, attempt k = 0 … maxAttempts − 1 factors P + s·firstJitter·growthᵏ·I;
 /// the first that has a Cholesky factor is committed and the step returns `Status::Repaired`. When
 /// none has one (or s is zero), the step is refused with `Status::NotPositiveDefinite` and nothing
-/// changes. The defaults add at most 16ε·10⁴ ≈ 3.6e-11 (double) of s: they mend a covariance that lost
-/// definiteness to rounding, and refuse one that is indefinite for a reason (bad sigma-point weights,
-/// a model that does not fit), which jitter would only hide.
+/// changes. The defaults add at most 16ε·10⁴ ≈ 3.6e-11 (double; 1.9e-2 in float) of s: they mend a
+/// covariance that lost definiteness to rounding, and refuse one that is indefinite for a reason (bad
+/// sigma-point weights, a model that does not fit), which jitter would only hide. Every field:
+/// docs/settings.md §2.
 template <class Scalar>
 struct CovarianceRepair {
-  int maxAttempts = 3;  ///< 0 disables the repair: a P without a factor is always refused.
+  int maxAttempts = 3;  ///< in [0, 64]; 0 disables the repair: a P without a factor is always refused.
   Scalar firstJitter = Scalar(16) * std::numeric_limits<Scalar>::epsilon();  ///< relative to mean |Pᵢᵢ|, > 0
   Scalar growth = Scalar(100);                                               ///< factor between attempts, ≥ 1
 };

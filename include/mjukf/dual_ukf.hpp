@@ -28,8 +28,11 @@ enum class DualUkfOrdering {
 
 /// Settings of `DualUkf` over a model of `StateDim` states, `ParamDim` parameters and `MeasDim`
 /// measurements, validated at construction. The shared fields (P₀, Q, R, …) are those of the state
-/// filter (x alone); the parameter filter has its own below. Templated on the sizes, not the model;
-/// `DualUkf<Model>::Settings` or `DualUkfSettingsFor<Model>` name it.
+/// filter (x alone), but R is also the parameter filter's (plus `parameterObservationNoise`), `repair`
+/// settles both filters' covariances, the gate tests the state filter's update only (a rejection
+/// refuses both) and the parameter bounds clamp θ̂; the parameter filter has its own fields below.
+/// Templated on the sizes, not the model; `DualUkf<Model>::Settings` or `DualUkfSettingsFor<Model>`
+/// name it. Every field: docs/settings.md §2, §3 and §7.
 template <class Scalar_, int StateDim, int ParamDim, int MeasDim>
 struct DualUkfSettings : ParameterEstimationSettings<Scalar_, StateDim, MeasDim, ParamDim> {
   /// The floating-point type.
@@ -40,11 +43,11 @@ struct DualUkfSettings : ParameterEstimationSettings<Scalar_, StateDim, MeasDim,
   using ParamMatrix = Eigen::Matrix<Scalar, ParamDim, ParamDim>;
   /// An m × m matrix, as R.
   using MeasMatrix = Eigen::Matrix<Scalar, MeasDim, MeasDim>;
-  /// α, β, κ of the parameter filter's sigma points (L = p).
+  /// α, β, κ of the parameter filter's sigma points (L = p); not used by the cubature set.
   SigmaPointParameters<Scalar> parameterSigmaPoints;
   /// P^θ₀, the initial parameter covariance, symmetric positive definite.
   ParamMatrix initialParameterCovariance = ParamMatrix::Zero();
-  /// Q_θ of the parameters' random walk, symmetric positive semi-definite.
+  /// Q_θ of the parameters' random walk, added at every time update, symmetric positive semi-definite.
   ParamMatrix parameterProcessNoise = ParamMatrix::Zero();
   /// Added to the parameter filter's observation noise, which is the state filter's predicted
   /// innovation covariance H P⁻ Hᵀ + R (the state's uncertainty and the sensor's; docs/algorithms.md §9):

@@ -15,7 +15,7 @@ namespace mjukf {
 
 /// Settings of an unscented estimate of an `EstimateDim`-vector (the state x for `Ukf`,
 /// `ModifiedJointUkf` and the state filter of `DualUkf`; [x; θ] for `JointUkf`) measured through
-/// `MeasDim` components. Validated when a filter is constructed.
+/// `MeasDim` components. Validated when a filter is constructed. Every field: docs/settings.md §2.
 template <class Scalar_, int EstimateDim, int MeasDim>
 struct UnscentedSettings {
   /// The floating-point type.
@@ -25,10 +25,14 @@ struct UnscentedSettings {
   /// The type of R (m × m).
   using MeasMatrix = Eigen::Matrix<Scalar, MeasDim, MeasDim>;
 
-  SigmaPointParameters<Scalar> sigmaPoints;                       ///< α, β, κ
-  CovarianceMatrix initialCovariance = CovarianceMatrix::Zero();  ///< P₀, symmetric positive definite
-  CovarianceMatrix processNoise = CovarianceMatrix::Zero();       ///< Q, symmetric positive semi-definite
-  MeasMatrix measurementNoise = MeasMatrix::Zero();               ///< R, symmetric positive definite
+  /// α, β, κ of van der Merwe's set (L = `EstimateDim`); not used by the cubature set.
+  SigmaPointParameters<Scalar> sigmaPoints;
+  /// P₀, symmetric positive definite; the default (zero) is refused.
+  CovarianceMatrix initialCovariance = CovarianceMatrix::Zero();
+  /// Q, symmetric positive semi-definite, added once per time update (however many steps it covers).
+  CovarianceMatrix processNoise = CovarianceMatrix::Zero();
+  /// R, symmetric positive definite; the default (zero) is refused.
+  MeasMatrix measurementNoise = MeasMatrix::Zero();
   /// false (the paper's Algorithm 1): the measurement update reuses the propagated sigma points, so
   /// P_xy and P_yy leave Q out. true: it draws new points from (x̂⁻, P⁻), which costs one more
   /// Cholesky factorisation and makes the filter the textbook Kalman filter on linear models.
@@ -40,7 +44,8 @@ struct UnscentedSettings {
   MeasurementGate<Scalar, MeasDim> gate;
 };
 
-/// The shared settings of a filter that also estimates `ParamDim` parameters.
+/// The shared settings of a filter that also estimates `ParamDim` parameters. Every field:
+/// docs/settings.md §2–3.
 template <class Scalar, int EstimateDim, int MeasDim, int ParamDim>
 struct ParameterEstimationSettings : UnscentedSettings<Scalar, EstimateDim, MeasDim> {
   /// Box bounds on the estimated parameters (parameter_bounds.hpp); off by default.

@@ -17,7 +17,8 @@ namespace mjukf {
 /// Settings of `JointUkf` over a model of `StateDim` states, `ParamDim` parameters and `MeasDim`
 /// measurements, validated at construction. P₀ and Q are of the augmented vector [x; θ]: their θ block
 /// is the parameters' initial uncertainty and random-walk process noise. Templated on the sizes, not
-/// the model; `JointUkf<Model>::Settings` or `JointUkfSettingsFor<Model>` name it.
+/// the model; `JointUkf<Model>::Settings` or `JointUkfSettingsFor<Model>` name it. Every field:
+/// docs/settings.md §2, §3 and §5.
 template <class Scalar, int StateDim, int ParamDim, int MeasDim>
 struct JointUkfSettings : ParameterEstimationSettings<Scalar, StateDim + ParamDim, MeasDim, ParamDim> {
   /// n + p, the dimension of the augmented vector [x; θ].

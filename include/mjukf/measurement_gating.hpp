@@ -49,7 +49,8 @@ inline double chiSquareQuantile(double probability, int dof) {
 /// exceeds `nisThreshold(k − 1)` is refused with `Status::MeasurementRejected` and changes nothing. The
 /// NIS of a consistent filter is χ²-distributed with k degrees of freedom, so `chiSquare(0.999)` rejects
 /// one good measurement in a thousand. Gating needs an R that matches the actual measurement noise:
-/// with an R far below it (the paper's tank R = 1e-7) every measurement looks like an outlier.
+/// with an R far below it (the paper's tank R = 1e-7) every measurement looks like an outlier. Every
+/// field: docs/settings.md §2.
 template <class Scalar, int MeasDim>
 struct MeasurementGate {
   /// One threshold per measurement component.

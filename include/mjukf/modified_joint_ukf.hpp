@@ -49,7 +49,7 @@ class ParameterScalings : public Eigen::Matrix<Scalar, ParamDim, 1> {
 /// Settings of `ModifiedJointUkf` over a model of `StateDim` states, `ParamDim` parameters and
 /// `MeasDim` measurements, validated at construction: P₀ and Q of the state x, and the parameter step
 /// of eqs. 8–9. Templated on the sizes, not the model; `ModifiedJointUkf<Model>::Settings` or
-/// `ModifiedJointUkfSettingsFor<Model>` name it.
+/// `ModifiedJointUkfSettingsFor<Model>` name it. Every field: docs/settings.md §2, §3 and §6.
 template <class Scalar_, int StateDim, int ParamDim, int MeasDim>
 struct ModifiedJointUkfSettings : ParameterEstimationSettings<Scalar_, StateDim, MeasDim, ParamDim> {
   /// The floating-point type.
@@ -64,17 +64,22 @@ struct ModifiedJointUkfSettings : ParameterEstimationSettings<Scalar_, StateDim,
   /// (the paper's scalar ξ). Sign: θ̂ᵣ approaches the truth when ξᵣ (T ψ)ᵣᵣ < 0, ψ = ∂ŷ/∂θ̂ through the
   /// dynamics; with a row of T ≥ 0, ξᵣ is negative when the measurements rise with the parameter (the
   /// tank's ∂y/∂k_flow > 0 takes ξ = −1; ξ = +1 diverges). Too large diverges, too small converges
-  /// slowly (docs/tuning-mjukf.md).
+  /// slowly (docs/tuning-mjukf.md). The default 0 is accepted but leaves the parameters at θ̂₀: set it,
+  /// or use `adaptiveScaling`.
   ParameterScalings<Scalar, ParamDim> scaling;
   /// T of eq. 9 (p × m): how much of each measurement's error moves each parameter, and in which
   /// direction. Each row has Σⱼ |tᵣⱼ| = 1 (eq. 14 with signed entries): T only distributes, ξ sets the
-  /// size; a row of entries ≥ 0 sums to 1 as in the paper.
+  /// size; a row of entries ≥ 0 sums to 1 as in the paper. The default (zero) is therefore refused
+  /// unless `automaticTransformation`.
   Transformation transformation = Transformation::Zero();
-  /// p_θ of eq. 8: the spacing of the initial per-point parameters θᵢ around θ̂₀.
+  /// p_θ of eq. 8: the spacing of the initial per-point parameters θᵢ, evenly over θ̂₀ ± n p_θ; zero (the
+  /// default) starts them all at θ̂₀. The automatic modes also take max(|θ̂₀|, (n + 1)|p_θ|) as each
+  /// parameter's prior scale.
   Param parameterSpread = Param::Zero();
-  /// true: T is computed by the filter from the sensitivities of the measurements to the parameters
-  /// through the dynamics (eqs. 14–15), refreshed at every time update, and `transformation` is not
-  /// used (docs/tuning-mjukf.md). false (the paper): `transformation` as given.
+  /// true: T is computed by the filter at every measurement update from the sensitivities of the
+  /// measurements to the parameters through the dynamics (eqs. 14–15; the sensitivities refreshed as
+  /// `sensitivityInterval` says), and `transformation` is not used (docs/tuning-mjukf.md). false (the
+  /// paper): `transformation` as given.
   bool automaticTransformation = false;
   /// true: ξ is set at every measurement update, for each parameter, from the sensitivities, the
   /// innovation covariance P_yy and the information gathered so far (a recursive least-squares gain,
@@ -88,6 +93,7 @@ struct ModifiedJointUkfSettings : ParameterEstimationSettings<Scalar_, StateDim,
   Scalar convergenceTime = Scalar(5);
   /// With either automatic mode: the sensitivities are recomputed at every `sensitivityInterval`-th
   /// time update (p extra propagations each) and kept in between; 0: once, at the first time update.
+  /// Must be ≥ 0, checked even with both modes off.
   int sensitivityInterval = 1;
 };
 

@@ -21,7 +21,8 @@ namespace mjukf {
 /// - ModifiedJointUkf: each per-point θᵢ is clamped after eq. 9 (every θᵢ is used to propagate a
 ///   point, so every one must be valid), and θ̂ is their mean (eq. 10), which is then in the box too.
 ///   The θᵢ of eq. 8 are clamped at construction.
-/// The initial parameters must lie in the box.
+/// - DualUkf: θ̂ is clamped after each correction of the parameter filter; P^θ is left as it is.
+/// The initial parameters must lie in the box. Every field: docs/settings.md §3.
 template <class Scalar, int ParamDim>
 struct ParameterBounds {
   /// The parameter vector θ.

@@ -20,7 +20,8 @@
 
 namespace mjukf {
 
-/// The three scaling parameters of the sigma points. The paper uses α = 1, β = 2, κ = 0.
+/// The three scaling parameters of the sigma points. The paper uses α = 1, β = 2, κ = 0. Every field:
+/// docs/settings.md §2.
 template <class Scalar>
 struct SigmaPointParameters {
   Scalar alpha = 1;  ///< Spread of the points around the mean; must be positive.

@@ -16,6 +16,7 @@ namespace mjukf {
 /// Settings of `Ukf` over a model of `StateDim` states and `MeasDim` measurements, validated at
 /// construction: P₀ and Q of the state x. Templated on the sizes, not the model, so one value serves
 /// every model of the same shape; `Ukf<Model>::Settings` or `UkfSettingsFor<Model>` name it.
+/// Every field: docs/settings.md §2 and §4.
 template <class Scalar, int StateDim, int MeasDim>
 struct UkfSettings : UnscentedSettings<Scalar, StateDim, MeasDim> {
   /// The type of P₀ and Q (n × n).
