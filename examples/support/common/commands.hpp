@@ -88,7 +88,7 @@ void overrideVector(const Arguments& args, const std::string& flag, Vector& vect
 }
 
 // --p0, --q and --r: the same three diagonals in every filter's settings (the dual's state filter's;
-// its parameter filter observes with R plus its own parameterObservationNoise, --r-theta).
+// its parameter filter observes with H P⁻ Hᵀ + R plus its own parameterObservationNoise, --r-theta).
 template <class Settings>
 void overrideCovariances(const Arguments& args, Settings& settings) {
   overrideDiagonal(args, "--p0", settings.initialCovariance);

@@ -37,7 +37,7 @@ void printUsage(std::ostream& out) {
       << "      --p0 DIAG  --q DIAG  --r DIAG (dual: of its state filter; alpha, beta, kappa: of both filters);\n"
       << "      mjukf only: --xi X|LIST (one for every parameter, or one each)  --p-theta LIST  --transform LIST (row-major);\n"
       << "      dual only: --ordering prior|updated (the state's time update with the prior or the corrected\n"
-      << "      parameters; default prior)  --r-theta DIAG (added to R in the parameter filter's update)\n"
+      << "      parameters; default prior)  --r-theta DIAG (added to the parameter filter's observation noise)\n"
       << "\n";
   if constexpr (hasPaperTable<Plant>)
     out << "  paper [--data FILE] [--out-dir DIR] " << (change ? "[--change-data FILE] " : "")

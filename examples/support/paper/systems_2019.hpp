@@ -70,8 +70,8 @@ struct Settings2019 {
     return s;
   }
 
-  /// The state filter as the UKF's; the parameter filter starts from JUKF's θ block and observes with R
-  /// alone (no extra parameterObservationNoise).
+  /// The state filter as the UKF's; the parameter filter starts from JUKF's θ block and observes with the
+  /// state filter's innovation covariance (no extra parameterObservationNoise).
   DualUkfSettingsFor<Model> dualUkf() const {
     DualUkfSettingsFor<Model> s;
     static_cast<UnscentedSettings<Scalar, Model::StateDim, Model::MeasDim>&>(s) = ukf();
