@@ -509,6 +509,10 @@ INSTANTIATE_TEST_SUITE_P(
                       MalformedCase{"HeaderOnly", "t,y1,y2\n", "2"},
                       MalformedCase{"WrongTimeGrid", "t,y1,y2\n0,0,0\n0.001,1,2\n0.004,1,2\n", "4"},
                       MalformedCase{"BlankLineInside", "t,y1,y2\n0,0,0\n\n0.002,1,2\n", "3"},
+                      MalformedCase{"BlankLineBeforeHeader", "\nt,y1,y2\n0,0,0\n", "1"},
+                      // The library's reader reads an empty cell as a missing sample (NaN): the programs
+                      // need every measurement, so it is refused on its line like a NaN.
+                      MalformedCase{"EmptyCell", "t,y1,y2\n0,0,0\n0.001,,2\n0.002,1,2\n", "3"},
                       // Non-finite values: row 1 is not a measurement row of the tank (every 2 steps), so
                       // a NaN there used to be ignored; on row 2 it stopped the run half way.
                       MalformedCase{"NanInUnmeasuredRow", "t,y1,y2\n0,0,0\n0.001,nan,2\n0.002,1,2\n", "3"},

@@ -45,15 +45,19 @@ struct PlantData {
 
 namespace detail {
 
-// Column `name` of `table`, refused at the first NaN or infinity: a filter would skip one on a row
-// without a measurement and stop half way on one with, and a truth of NaN makes a NaN RMSE.
+// Column `name` of `table`, refused at the first missing value (an empty cell or NaN) or infinity: a
+// filter would skip one on a row without a measurement and stop half way on one with, and a truth of
+// NaN makes a NaN RMSE.
 inline const std::vector<double>& finiteColumn(const CsvTable& table, const std::string& path,
                                                const std::string& name) {
   const auto& column = table.column(name);
   for (std::size_t k = 0; k < column.size(); ++k)
     if (!std::isfinite(column[k]))
-      throw CsvError(path, static_cast<long>(k) + 2,
-                     "column '" + name + "' holds " + std::to_string(column[k]) + ": only finite numbers are allowed");
+      throw CsvError(path, table.line(k),
+                     "column '" + name + "' " +
+                         (std::isnan(column[k]) ? "has a missing value (an empty cell or NaN)"
+                                                : "holds " + std::to_string(column[k])) +
+                         ": only finite numbers are allowed");
   return column;
 }
 
@@ -103,7 +107,7 @@ PlantData<Model> loadPlantData(const std::string& path, double h, const typename
   for (std::size_t k = 0; k < t.size(); ++k) {
     const double expected = static_cast<double>(k) * h;
     if (!(std::abs(t[k] - expected) <= 0.25 * h))
-      throw CsvError(path, static_cast<long>(k) + 2,
+      throw CsvError(path, table.line(k),
                      "t = " + std::to_string(t[k]) + ", but row " + std::to_string(k) +
                          " must be at t = " + std::to_string(expected) +
                          " (one row per step of h = " + std::to_string(h) + " s from t = 0; see --step)");
