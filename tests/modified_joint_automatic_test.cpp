@@ -297,6 +297,9 @@ TEST(AutomaticModes, SettingsAreValidated) {
     auto s = automatic(Robot::modifiedJointUkf());
     s.convergenceTime = bad;
     expectRejected(s, "convergenceTime");
+    s = automatic(Robot::modifiedJointUkf());
+    s.minimumMemoryUpdates = bad;
+    expectRejected(s, "minimumMemoryUpdates");
   }
   auto s = automatic(Robot::modifiedJointUkf());
   s.sensitivityInterval = -1;

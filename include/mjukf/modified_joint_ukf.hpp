@@ -91,6 +91,13 @@ struct ModifiedJointUkfSettings : ParameterEstimationSettings<Scalar_, StateDim,
   /// served the tank, the robot (with its parameter change), Van der Pol and Lorenz alike
   /// (docs/tuning-mjukf.md).
   Scalar convergenceTime = Scalar(5);
+  /// With `adaptiveScaling`: the least memory in measurement updates, whatever the sampling interval.
+  /// With Δt the interval between updates, the memory is the longer of `convergenceTime` and
+  /// minimumMemoryUpdates · Δt: millisecond sampling keeps `convergenceTime` (5 s is 1,000–2,500
+  /// updates on the plants), sampling every second or slower averages over at least this many updates,
+  /// since a memory of a few updates turns each one's noise into a step of the same size
+  /// (docs/tuning-mjukf.md). Must be finite and ≥ 1.
+  Scalar minimumMemoryUpdates = Scalar(100);
   /// With either automatic mode: the sensitivities are recomputed at every `sensitivityInterval`-th
   /// time update (p extra propagations each) and kept in between; 0: once, at the first time update.
   /// Must be ≥ 0, checked even with both modes off.
@@ -191,8 +198,10 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
     const Settings& s = c.settings;
     if (automatic_) {
       const Scalar memory = s.adaptiveScaling ? s.convergenceTime : std::numeric_limits<Scalar>::infinity();
+      const Scalar updates = s.adaptiveScaling ? s.minimumMemoryUpdates : std::numeric_limits<Scalar>::infinity();
       const auto measure = [&c](const State& x, const Param& theta) { return measureModel(c.model, x, c.input, theta); };
-      if (!sensitivity_.correct(c.priorMean, parameters_, measure, c.gainFactor, c.innovationFactor, memory, c.present))
+      if (!sensitivity_.correct(c.priorMean, parameters_, measure, c.gainFactor, c.innovationFactor, memory, updates,
+                                c.present))
         return Status::NonFiniteResult;
     }
     if (s.automaticTransformation)
@@ -339,6 +348,8 @@ class ModifiedJointUkf
       return e;
     if (settings.adaptiveScaling && !(std::isfinite(settings.convergenceTime) && settings.convergenceTime > 0))
       return detail::invalid(kOwner, "convergenceTime", "must be finite and > 0 (seconds)");
+    if (settings.adaptiveScaling && !(std::isfinite(settings.minimumMemoryUpdates) && settings.minimumMemoryUpdates >= 1))
+      return detail::invalid(kOwner, "minimumMemoryUpdates", "must be finite and >= 1 (measurement updates)");
     if (settings.sensitivityInterval < 0) return detail::invalid(kOwner, "sensitivityInterval", "must be >= 0");
     // Each row of T has Σⱼ |tᵣⱼ| = 1 (paper eq. 14, with signed entries): T only distributes the error
     // and its direction, ξ sets its scale. A T that does not is almost always a typo or a transposed

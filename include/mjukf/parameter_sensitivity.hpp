@@ -51,7 +51,9 @@ class ParameterSensitivity {
     measurement_ = MeasSensitivity::Zero();
     information_ = Information::Zero();
     information_.diagonal() = scale.array().square().inverse().matrix();
+    priorInformation_ = information_.diagonal();
     openLoopTime_ = sinceCorrection_ = Scalar(0);
+    corrections_ = 0;
     candidateState_ = state_;
     stale_ = false;
   }
@@ -123,13 +125,17 @@ class ParameterSensitivity {
 
   /// Measurement update about the prior (x̂⁻, θ̂), with g the model's measurement: ψ by forward
   /// differences of g along (W⁻ᵣ, eᵣ), zero on missing components; W ← W⁻ − K ψ; the information
-  /// I ← λ I + ψᵀ P_yy⁻¹ ψ with the forgetting λ = exp(−Δt / memory), Δt the time since the last
-  /// correction. `innovationFactor` is the lower Cholesky factor S of P_yy and `whitenedCross` is
-  /// U = P_xy S⁻ᵀ, so that K ψ = U (S⁻¹ ψ) (detail/unscented_engine.hpp). Returns false (candidates
-  /// unspecified) when a result is not finite.
+  /// I ← λ I + (1 − λ) I₀ + w ψᵀ P_yy⁻¹ ψ (the prior I₀ is never forgotten) with the forgetting
+  /// λ = max(exp(−Δt / memory), exp(−1 / minimumUpdates)), Δt the time since the last correction (a
+  /// memory of `memory` time units, and of at least `minimumUpdates` updates however long the
+  /// interval), and the weight w of `weight()`.
+  /// `innovationFactor` is the lower Cholesky factor S of P_yy and `whitenedCross` is U = P_xy S⁻ᵀ, so
+  /// that K ψ = U (S⁻¹ ψ) (detail/unscented_engine.hpp). Returns false (candidates unspecified) when a
+  /// result is not finite.
   template <class Measure, class WhitenedCross>
   bool correct(const State& priorMean, const Param& theta, Measure&& measure, const WhitenedCross& whitenedCross,
-               const MeasMatrix& innovationFactor, Scalar memory, const MeasurementMask<M>* present) {
+               const MeasMatrix& innovationFactor, Scalar memory, Scalar minimumUpdates,
+               const MeasurementMask<M>* present) {
     candidateState_ = state_;
     if (stale_) {
       candidateMeasurement_ = measurement_;
@@ -151,13 +157,24 @@ class ParameterSensitivity {
     whitened_ = candidateMeasurement_;
     detail::solveLowerInPlace(innovationFactor, whitened_);                        // S⁻¹ ψ
     if (!stale_) candidateState_.noalias() -= whitenedCross * whitened_;           // W − K ψ = W − U S⁻¹ ψ
-    if (sinceCorrection_ != forgettingInterval_ || memory != forgettingMemory_) {  // exp once per schedule
+    if (sinceCorrection_ != forgettingInterval_ || memory != forgettingMemory_ ||
+        minimumUpdates != forgettingUpdates_) {  // exp once per schedule
       forgettingInterval_ = sinceCorrection_;
       forgettingMemory_ = memory;
-      forgetting_ = std::exp(-sinceCorrection_ / memory);
+      forgettingUpdates_ = minimumUpdates;
+      forgetting_ = std::max(std::exp(-sinceCorrection_ / memory), std::exp(Scalar(-1) / minimumUpdates));
+      memoryUpdates_ = forgetting_ < Scalar(1) ? Scalar(-1) / std::log(forgetting_)
+                                               : std::numeric_limits<Scalar>::infinity();
     }
+    weight_ = std::min(Scalar(1), Scalar(corrections_ + 1) / (kEasing * memoryUpdates_));
+    if (!(weight_ > Scalar(0))) weight_ = Scalar(1);  // an infinite memory: no easing
+    // The memory forgets the data, never the prior: I = I₀ + Σ λ^(k−j) wⱼ Jⱼ. Forgetting I₀ too would let
+    // the information about a direction the data do not excite decay to zero, and the gain I⁻¹ ψᵀ P_yy⁻¹
+    // grow without bound in it (the wind-up of recursive least squares with forgetting), the solve with
+    // I amplifying rounding on its way there.
     candidateInformation_ = forgetting_ * information_;
-    candidateInformation_.noalias() += whitened_.transpose() * whitened_;
+    candidateInformation_.diagonal() += (Scalar(1) - forgetting_) * priorInformation_;
+    candidateInformation_.noalias() += weight_ * (whitened_.transpose() * whitened_);
     return detail::allFinite(candidateMeasurement_) && detail::allFinite(candidateState_) &&
            detail::allFinite(candidateInformation_);
   }
@@ -167,6 +184,7 @@ class ParameterSensitivity {
     state_ = candidateState_;
     if (!stale_) measurement_ = candidateMeasurement_;
     information_ = candidateInformation_;
+    ++corrections_;
     sinceCorrection_ = Scalar(0);
     if (!stale_) openLoopTime_ = Scalar(0);
   }
@@ -185,7 +203,7 @@ class ParameterSensitivity {
     }
   }
 
-  /// The adaptive ξ (docs/tuning-mjukf.md): the recursive least-squares gain G = I⁻¹ ψᵀ P_yy⁻¹ (p × m)
+  /// The adaptive ξ (docs/tuning-mjukf.md): the recursive least-squares gain G = w I⁻¹ ψᵀ P_yy⁻¹ (p × m)
   /// of the candidate information, and ξᵣ the least-squares fit of −ξᵣ Tᵣ to its row Gᵣ, so that eq. 9
   /// with T moves θᵣ as G would, as far as T's row allows. ξᵣ = 0 for a zero row of T.
   void scaling(const Transformation& t, const MeasMatrix& innovationFactor, Param& xi) {
@@ -201,9 +219,16 @@ class ParameterSensitivity {
     detail::solveUpperInPlace(informationFactor, gain_);
     for (int r = 0; r < P; ++r) {
       const Scalar norm = t.row(r).squaredNorm();
-      xi(r) = norm > Scalar(0) ? -gain_.row(r).dot(t.row(r)) / norm : Scalar(0);
+      xi(r) = norm > Scalar(0) ? -weight_ * gain_.row(r).dot(t.row(r)) / norm : Scalar(0);
     }
   }
+
+  /// The weight w of the measurement update in progress: (k + 1) / (memory in updates / 10) for the k-th
+  /// update since the start, at most 1. While the state estimate settles from its first guess the
+  /// innovations are mostly its error, not the parameters'; easing the adaptation in over a tenth of
+  /// the memory keeps that error from moving θ̂ early and from staying in the information for the whole
+  /// memory (docs/tuning-mjukf.md).
+  Scalar weight() const { return weight_; }
 
   /// W = ∂x̂/∂θ̂ of the last committed update.
   const StateSensitivity& stateSensitivity() const { return state_; }
@@ -217,6 +242,7 @@ class ParameterSensitivity {
   StateSensitivity state_ = StateSensitivity::Zero();      // W
   MeasSensitivity measurement_ = MeasSensitivity::Zero();  // ψ
   Information information_ = Information::Identity();      // I
+  Param priorInformation_ = Param::Ones();                 // the diagonal of I₀ = diag(1 / scaleᵣ²)
   Scalar openLoopTime_ = 0;                                // open-loop propagation since W was last predicted
   Scalar sinceCorrection_ = 0;                             // model time since the last measurement update
   // Candidates and workspace.
@@ -227,7 +253,12 @@ class ParameterSensitivity {
   bool stale_ = false;  // the last time update did not refresh W: reuse ψ
   bool candidateStale_ = false;
   Meas noiseWeights_ = Meas::Ones();                                         // 1 / √Rⱼⱼ
-  Scalar forgettingInterval_ = -1, forgettingMemory_ = -1, forgetting_ = 1;  // λ of the last interval
+  // λ of the last interval, and the memory in updates it makes, −1 / ln λ.
+  Scalar forgettingInterval_ = -1, forgettingMemory_ = -1, forgettingUpdates_ = -1, forgetting_ = 1;
+  Scalar memoryUpdates_ = std::numeric_limits<Scalar>::infinity();
+  static constexpr Scalar kEasing = Scalar(0.1);  // the adaptation is eased in over this share of the memory
+  Scalar weight_ = 1;                             // w of the update in progress
+  long corrections_ = 0;                          // measurement updates since the start
   // Workspace, zeroed once so that copying an object (a filter is built from a copy of its policy)
   // copies no indeterminate values.
   MeasSensitivity whitened_ = MeasSensitivity::Zero();
