@@ -180,7 +180,7 @@ TEST(JointFilters, ModifiedJointUkfStepMatchesEquations9And10) {
   Eigen::Vector2d sum = Eigen::Vector2d::Zero();
   for (int i = 0; i < 9; ++i) {
     const Eigen::Vector2d expected =
-        Robot::initialParameters() - settings.scaling * settings.transformation * (y - points.col(i));
+        Robot::initialParameters() - settings.scaling.asDiagonal() * settings.transformation * (y - points.col(i));
     EXPECT_LT((filter.parameterPoints().col(i) - expected).cwiseAbs().maxCoeff(), 1e-14) << "point " << i;
     sum += expected;
   }
