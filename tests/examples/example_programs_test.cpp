@@ -1,7 +1,7 @@
 // The example programs end to end, run as a user runs them: every subcommand on a short horizon,
 // `estimate` against the conformance RMSEs on the reference files, the dual UKF on the same files,
 // `simulate` followed by `estimate`, and the error paths (malformed CSV → exit 2 with the line number;
-// bad command line → usage, 64).
+// bad command line → usage, 64). Failed and interrupted runs' files: output_files_test.cpp.
 
 #include <sys/wait.h>
 
@@ -431,13 +431,19 @@ TEST(Simulate, ChangeAtBeyondTheRunChangesNothing) {
   for (double theta : table.column("theta2_true")) ASSERT_EQ(theta, 0.21);
 }
 
-// table.txt is checked like every other output: a failed write is exit 1, not a file listed as written.
+// table.txt is checked like every other output: a failed write is exit 1, not a file listed as written,
+// and no other file of the run is put in place (they are committed together).
 TEST(Paper, FailingToWriteTheTableIsAnError) {
   const fs::path dir = scratch("paper");
+  fs::remove_all(dir);
   fs::create_directories(dir / "coupled_tank_table.txt");  // a directory where the file should go
   const Result r = run(kTank + " paper --duration 1 --runs 1 --out-dir " + dir.string());
   EXPECT_EQ(r.exitCode, 1) << r.output;
   EXPECT_NE(r.output.find("coupled_tank_table.txt: cannot write the file"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("wrote:"), std::string::npos) << r.output;
+  std::vector<std::string> left;
+  for (const auto& entry : fs::directory_iterator(dir)) left.push_back(entry.path().filename().string());
+  EXPECT_EQ(left, std::vector<std::string>{"coupled_tank_table.txt"});
 }
 
 // The table lines are built without a fixed-size buffer: a long --data path is printed whole.

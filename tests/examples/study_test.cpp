@@ -16,6 +16,7 @@
 
 namespace {
 
+using mjukf::program_tests::readText;
 using mjukf::program_tests::Result;
 using mjukf::program_tests::run;
 using mjukf::program_tests::scratch;
@@ -25,11 +26,6 @@ const std::string kTank = MJUKF_COUPLED_TANK;
 const std::string kRobot = MJUKF_FLEXIBLE_JOINT;
 const std::string kVanDerPol = MJUKF_VAN_DER_POL;
 const std::string kLorenz = MJUKF_LORENZ;
-
-std::string readText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
 
 std::vector<std::string> lines(const std::string& text) {
   std::vector<std::string> result;

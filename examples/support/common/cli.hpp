@@ -19,9 +19,11 @@ namespace mjukf::examples {
 /// Exit codes of the example programs.
 enum ExitCode : int {
   kExitOk = 0,
-  kExitFailure = 1,  ///< the run itself failed: a filter refused a step, an output could not be written
+  kExitFailure = 1,  ///< the run itself failed: a filter refused a step, an output could not be written, gnuplot failed
   kExitBadData = 2,  ///< an input CSV file is malformed or truncated (the message names the line)
   kExitUsage = 64,   ///< unknown subcommand or flag, missing or bad value (sysexits' EX_USAGE)
+  /// stopped by a signal: 128 + its number, 129 SIGHUP, 130 SIGINT, 143 SIGTERM (interrupt.hpp)
+  kExitSignal = 128,
 };
 
 /// The command line was wrong; what() says how.

@@ -6,12 +6,15 @@
 #include <iostream>
 #include <limits>
 #include <set>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "common/atomic_file.hpp"
 #include "common/cli.hpp"
 #include "common/estimation.hpp"
 #include "common/experiment.hpp"
+#include "common/format.hpp"
 #include "common/plant.hpp"
 #include "common/simulation.hpp"
 
@@ -41,8 +44,11 @@ int simulateCommand(const std::vector<std::string>& words) {
   requireSimulationDuration("--duration", options.duration, options.stepSize);
   options.snrDb = args.number("--snr-db", 30, /*allowInfinity=*/true);
 
+  OutputFiles outputs;
+  const OutputFile& file = outputs.add(out);  // before a long simulation: can the file be written?
   const auto data = simulateExperiment<Experiment>(options);
-  writePlantData(out, data);
+  writePlantData(file, data);
+  outputs.commit();
   char noise[64];
   if (hasRelativeNoise<Experiment>)
     std::snprintf(noise, sizeof noise, "noise std %g |x_i|", options.relativeNoise);
@@ -173,14 +179,15 @@ int estimateCommand(const std::vector<std::string>& words) {
   if (!(h > 0)) throw UsageError("--step needs a positive step size");
   const long rmseFrom = args.integer("--rmse-from", Experiment::rmseFromRow, 0);
 
-  const auto data = loadPlantData<Model>(dataPath, h, Model::trueParameters());
+  const auto data = loadPlantData<Model>(dataPath, Plant::title, h, Model::trueParameters());
+  OutputFiles outputs;
+  const OutputFile& file = outputs.add(out);
   EstimateRun<Model> run;
   try {
     run = runFilter(Model(), setup, data);
   } catch (const std::invalid_argument& e) {
     throw UsageError(std::string("bad filter setting: ") + e.what());
   }
-  writeEstimates(out, run, h);
 
   const bool updated = setup.dualUkf.ordering == DualUkfOrdering::UpdatedParameters;
   std::printf("%s%s on %s: %ld rows, h = %g s, a measurement every %d steps\n", filterName(setup.kind),
@@ -188,12 +195,13 @@ int estimateCommand(const std::vector<std::string>& words) {
               : updated                         ? " (ordering: updated)"
                                                 : " (ordering: prior)",
               dataPath.c_str(), data.rows(), h, setup.measurementEvery);
-  if (run.outcome.status != Status::Ok) {
-    std::printf("error: the filter refused the step to row %ld (t = %g s): %s; %s holds rows 0-%ld only\n",
-                run.outcome.row, double(run.outcome.row) * h, toString(run.outcome.status), out.c_str(),
-                run.outcome.row - 1);
-    return kExitFailure;
-  }
+  // A run that stopped writes nothing: its rows 0…k−1 would look like a whole file of a shorter run.
+  if (run.outcome.status != Status::Ok)
+    throw std::runtime_error(detail::format("the filter refused the step to row %ld (t = %g s): %s; %s not written",
+                                            run.outcome.row, double(run.outcome.row) * h, toString(run.outcome.status),
+                                            out.c_str()));
+  writeEstimates(file, run, h);
+  outputs.commit();
   // Short runs have no rows past the paper's start of the RMSE window: take all of them, and say so.
   const long from = rmseFrom < data.rows() ? rmseFrom : 0;
   std::printf("parameter RMSE over rows >= %ld (t >= %g s)%s, truth: %s\n", from, double(from) * h,

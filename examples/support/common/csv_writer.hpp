@@ -3,25 +3,23 @@
 // Writes CSV files: a header row, then rows of numbers (and plain names) in the shortest form that reads back
 // to the same double (std::to_chars), so a simulated file fed to `estimate` loses nothing.
 
+#include <cerrno>
 #include <charconv>
 #include <cstdio>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "common/atomic_file.hpp"
+
 namespace mjukf::examples {
 
-/// A file that could not be written; what() names it.
-class OutputError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-
+/// Writes one CSV file under its temporary name (atomic_file.hpp); errors name the file's own path.
 class CsvWriter {
  public:
-  CsvWriter(const std::string& path, const std::vector<std::string>& header)
-      : path_(path), columns_(header.size()), file_(std::fopen(path.c_str(), "w")) {
-    if (file_ == nullptr) throw OutputError(path + ": cannot open the file for writing");
+  CsvWriter(const OutputFile& file, const std::vector<std::string>& header)
+      : path_(file.path), columns_(header.size()), file_(std::fopen(file.temporary.c_str(), "w")) {
+    if (file_ == nullptr) throw OutputError(detail::systemError(path_, "cannot open the file for writing", errno));
     for (std::size_t i = 0; i < header.size(); ++i) {
       if (i > 0) std::fputc(',', file_);
       std::fputs(header[i].c_str(), file_);
@@ -70,12 +68,11 @@ class CsvWriter {
     field_ = 0;
   }
 
-  /// Flushes and closes; throws OutputError when anything failed (a full disk, for example).
+  /// Flushes, syncs and closes; throws OutputError when any write failed (a full disk, for example).
   void close() {
-    const bool failed = std::ferror(file_) != 0;
-    const bool closeFailed = std::fclose(file_) != 0;
+    std::FILE* file = file_;
     file_ = nullptr;
-    if (failed || closeFailed) throw OutputError(path_ + ": writing the file failed");
+    if (!closeWhole(file)) throw OutputError(detail::systemError(path_, "writing the file failed", errno));
   }
 
  private:

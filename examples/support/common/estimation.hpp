@@ -130,13 +130,13 @@ typename Model::Param parameterRmse(const EstimateRun<Model>& run, const PlantDa
   return rmse.value();
 }
 
-/// Writes the estimates as t, x1…xn, theta1…thetap, one row per data row.
+/// Writes the estimates as t, x1…xn, theta1…thetap, one row per data row, to `file` (atomic_file.hpp).
 template <class Model>
-void writeEstimates(const std::string& path, const EstimateRun<Model>& run, double h) {
+void writeEstimates(const OutputFile& file, const EstimateRun<Model>& run, double h) {
   std::vector<std::string> header{"t"};
   for (const auto& names : {numberedNames("x", Model::StateDim), numberedNames("theta", Model::ParamDim)})
     header.insert(header.end(), names.begin(), names.end());
-  CsvWriter out(path, header);
+  CsvWriter out(file, header);
   for (std::size_t k = 0; k < run.state.size(); ++k) {
     out << static_cast<double>(k) * h;
     out.fields(run.state[k]).fields(run.parameters[k]);

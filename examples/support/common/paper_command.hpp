@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <optional>
 #include <set>
@@ -19,6 +18,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/atomic_file.hpp"
 #include "common/cli.hpp"
 #include "common/estimation.hpp"
 #include "common/experiment.hpp"
@@ -138,25 +138,22 @@ Figure stateFigure(const std::string& png, const std::string& title, const std::
 
 // Writes the data and the filters' estimates (`<prefix>data.csv`, `<prefix>jukf.csv`, `<prefix>mjukf.csv`,
 // `<prefix>dual.csv`) and draws `<prefix>parameters.png` (all three filters) and `<prefix>states.png`
-// (JUKF and MJUKF), adding every file made to `written`.
+// (JUKF and MJUKF), all into `outputs`.
 template <class Plant, class Model, class Path>
 void writeComparison(const Path& path, const std::string& prefix, const PlantData<Model>& data,
                      const Comparison<Model>& result, const std::string& parameterTitle, const std::string& stateTitle,
-                     Plotter& plotter, std::vector<std::string>& written) {
+                     Plotter& plotter, OutputFiles& outputs) {
   const std::string dataFile = path(prefix + "data.csv"), jointFile = path(prefix + "jukf.csv"),
                     modifiedFile = path(prefix + "mjukf.csv"), dualFile = path(prefix + "dual.csv");
-  writePlantData(dataFile, data);
-  writeEstimates(jointFile, result.jointUkf, data.stepSize);
-  writeEstimates(modifiedFile, result.modifiedJointUkf, data.stepSize);
-  writeEstimates(dualFile, result.dualUkf, data.stepSize);
-  written.insert(written.end(), {dataFile, jointFile, modifiedFile, dualFile});
+  writePlantData(outputs.add(dataFile), data);
+  writeEstimates(outputs.add(jointFile), result.jointUkf, data.stepSize);
+  writeEstimates(outputs.add(modifiedFile), result.modifiedJointUkf, data.stepSize);
+  writeEstimates(outputs.add(dualFile), result.dualUkf, data.stepSize);
   const std::string title = std::string(Plant::title) + ": ";
-  const std::string parameters = path(prefix + "parameters.png"), states = path(prefix + "states.png");
-  if (plotter.draw(parameterFigure<Plant>(parameters, title + parameterTitle, dataFile, data, jointFile, modifiedFile,
-                                          dualFile)))
-    written.push_back(parameters);
-  if (plotter.draw(stateFigure<Plant>(states, title + stateTitle, dataFile, data, jointFile, modifiedFile)))
-    written.push_back(states);
+  plotter.draw(outputs, parameterFigure<Plant>(path(prefix + "parameters.png"), title + parameterTitle, dataFile, data,
+                                               jointFile, modifiedFile, dualFile));
+  plotter.draw(outputs, stateFigure<Plant>(path(prefix + "states.png"), title + stateTitle, dataFile, data, jointFile,
+                                           modifiedFile));
 }
 
 // Loads `path`, or simulates `duration` seconds when it is empty.
@@ -167,7 +164,7 @@ PlantData<typename Plant::Experiment::Model> paperData(
   using Model = typename Plant::Experiment::Model;
   const double h = Plant::Experiment::stepSize;
   if (!path.empty()) {
-    auto data = loadPlantData<Model>(path, h, truth.before);
+    auto data = loadPlantData<Model>(path, Plant::title, h, truth.before);
     if (!data.parameterTruthFromFile)
       for (long k = 0; k < data.rows(); ++k) data.parameterTruth[std::size_t(k)] = truth.atRow(k, h);
     description = path;
@@ -208,7 +205,7 @@ int paperCommand(const std::vector<std::string>& words) {
     return (fs::path(outDir) / (std::string(Plant::slug) + "_" + name)).string();
   };
   Plotter plotter;
-  std::vector<std::string> written;
+  OutputFiles outputs;  // every file of the run, put in place together at its end (report.finish)
   detail::Report report;
   const auto say = [&](const std::string& line) { report.say(line); };
 
@@ -258,7 +255,7 @@ int paperCommand(const std::vector<std::string>& words) {
   say("  those recorded times (a comparison across machines, not a measurement of the scripts on this one)");
 
   detail::writeComparison<Plant>(path, "", data, result, "parameter estimates", "state estimates and measurements",
-                                 plotter, written);
+                                 plotter, outputs);
 
   // The parameter-change scenario: the plant changes at `change->at`; MJUKF takes its own ξ.
   if (change) {
@@ -291,10 +288,10 @@ int paperCommand(const std::vector<std::string>& words) {
     }
     detail::writeComparison<Plant>(path, "change_", changeData, changeResult,
                                    "parameter estimates with a parameter change",
-                                   "state estimates with a parameter change", plotter, written);
+                                   "state estimates with a parameter change", plotter, outputs);
   }
 
-  report.finish(path("table.txt"), written);
+  report.finish(outputs.add(path("table.txt")), outputs);
   return kExitOk;
 }
 

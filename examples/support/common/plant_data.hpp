@@ -4,6 +4,7 @@
 // known, the true state and parameters. Read from and written to CSV files with columns
 // t, y1…ym [, x1_true…xn_true] [, theta1_true…thetap_true].
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <limits>
@@ -73,33 +74,58 @@ std::vector<Vector> readVectors(const CsvTable& table, const std::string& path, 
   return rows;
 }
 
-// Whether the table has all, none, or only some of the columns `prefix1…prefixN suffix`.
-inline int countColumns(const CsvTable& table, const std::string& prefix, int n, const std::string& suffix) {
-  int found = 0;
-  for (int c = 1; c <= n; ++c) found += table.has(prefix + std::to_string(c) + suffix) ? 1 : 0;
-  return found;
+inline std::string joinNames(const std::vector<std::string>& names) {
+  std::string text;
+  for (const auto& name : names) text += (text.empty() ? "" : ", ") + name;
+  return text;
+}
+
+// A data file of the plant has the columns t and y1…ym, and x1_true…xn_true and theta1_true…thetap_true
+// each all or none, in any order; anything else (another plant's file, a misspelt name) is refused with
+// the columns expected, found, missing and not the plant's, as a file that merely contains the columns
+// wanted (the robot's y1…y4 hold the tank's y1, y2) would be read as the wrong plant's data.
+template <class Model>
+void requirePlantColumns(const CsvTable& table, const std::string& path, const std::string& plant) {
+  std::vector<std::string> required{"t"};
+  for (const auto& name : numberedNames("y", Model::MeasDim)) required.push_back(name);
+  const std::vector<std::string> groups[] = {numberedNames("x", Model::StateDim, "_true"),
+                                             numberedNames("theta", Model::ParamDim, "_true")};
+  std::vector<std::string> missing, unexpected;
+  for (const auto& name : required)
+    if (!table.has(name)) missing.push_back(name);
+  std::string expected = joinNames(required);
+  for (const auto& group : groups) {
+    std::size_t found = 0;
+    for (const auto& name : group) found += table.has(name) ? 1 : 0;
+    for (const auto& name : group)
+      if (found != 0 && !table.has(name)) missing.push_back(name);
+    expected += " [" + joinNames(group) + "]";
+  }
+  for (const auto& name : table.names()) {
+    bool known = std::find(required.begin(), required.end(), name) != required.end();
+    for (const auto& group : groups) known = known || std::find(group.begin(), group.end(), name) != group.end();
+    if (!known) unexpected.push_back(name);
+  }
+  if (missing.empty() && unexpected.empty()) return;
+  throw CsvError(path, 1,
+                 "the columns do not match the plant (" + plant + ")\n  expected: " + expected +
+                     " (a part in brackets all or none)\n  found:    " + joinNames(table.names()) +
+                     (missing.empty() ? "" : "\n  missing:  " + joinNames(missing)) +
+                     (unexpected.empty() ? "" : "\n  not the plant's: " + joinNames(unexpected)));
 }
 
 }  // namespace detail
 
-/// Reads a measurement file. Requires columns t and y1…ym and one row per step of `h` starting at
-/// t = 0; takes x*_true and theta*_true when all of them are present, else the parameter truth is
-/// `fallbackTruth`. Throws CsvError (with the line number) for anything malformed, NaN and infinities
-/// in the columns it reads included (the whole file is checked before any estimation starts).
+/// Reads a measurement file of the plant `plant` (its name, for messages). Requires the columns t and
+/// y1…ym, and x*_true and theta*_true all or none (no other column), and one row per step of `h`
+/// starting at t = 0; when the theta*_true columns are absent, the parameter truth is `fallbackTruth`.
+/// Throws CsvError (with the line number) for anything malformed, NaN and infinities in the columns it
+/// reads included (the whole file is checked before any estimation starts).
 template <class Model>
-PlantData<Model> loadPlantData(const std::string& path, double h, const typename Model::Param& fallbackTruth) {
+PlantData<Model> loadPlantData(const std::string& path, const std::string& plant, double h,
+                               const typename Model::Param& fallbackTruth) {
   const CsvTable table = readCsv(path);
-  const auto requireAllOrNone = [&](const std::string& prefix, int n, const std::string& suffix) {
-    const int found = detail::countColumns(table, prefix, n, suffix);
-    if (found != 0 && found != n)
-      throw CsvError(path, 1,
-                     "has only " + std::to_string(found) + " of the " + std::to_string(n) + " columns " + prefix +
-                         "1…" + prefix + std::to_string(n) + suffix);
-    return found == n;
-  };
-  if (!table.has("t")) throw CsvError(path, 1, "no column named 't'");
-  if (!requireAllOrNone("y", Model::MeasDim, ""))
-    throw CsvError(path, 1, "no columns y1…y" + std::to_string(Model::MeasDim));
+  detail::requirePlantColumns<Model>(table, path, plant);
   if (table.rows() == 0) throw CsvError(path, 2, "no data rows after the header");
 
   // The schedule pairs row k with t_k = k h: a file on another grid would be silently misread.
@@ -116,9 +142,8 @@ PlantData<Model> loadPlantData(const std::string& path, double h, const typename
   PlantData<Model> data;
   data.stepSize = h;
   data.y = detail::readVectors<typename Model::Meas>(table, path, "y", "");
-  if (requireAllOrNone("x", Model::StateDim, "_true"))
-    data.stateTruth = detail::readVectors<typename Model::State>(table, path, "x", "_true");
-  data.parameterTruthFromFile = requireAllOrNone("theta", Model::ParamDim, "_true");
+  if (table.has("x1_true")) data.stateTruth = detail::readVectors<typename Model::State>(table, path, "x", "_true");
+  data.parameterTruthFromFile = table.has("theta1_true");
   if (data.parameterTruthFromFile)
     data.parameterTruth = detail::readVectors<typename Model::Param>(table, path, "theta", "_true");
   else
@@ -126,16 +151,16 @@ PlantData<Model> loadPlantData(const std::string& path, double h, const typename
   return data;
 }
 
-/// Writes `data` as t, y1…ym, then x*_true when known, then theta*_true.
+/// Writes `data` as t, y1…ym, then x*_true when known, then theta*_true, to `file` (atomic_file.hpp).
 template <class Model>
-void writePlantData(const std::string& path, const PlantData<Model>& data) {
+void writePlantData(const OutputFile& file, const PlantData<Model>& data) {
   std::vector<std::string> header{"t"};
   for (const auto& names :
        {numberedNames("y", Model::MeasDim),
         data.stateTruth.empty() ? std::vector<std::string>{} : numberedNames("x", Model::StateDim, "_true"),
         numberedNames("theta", Model::ParamDim, "_true")})
     header.insert(header.end(), names.begin(), names.end());
-  CsvWriter out(path, header);
+  CsvWriter out(file, header);
   for (long k = 0; k < data.rows(); ++k) {
     const auto row = static_cast<std::size_t>(k);
     out << static_cast<double>(k) * data.stepSize;

@@ -1,7 +1,7 @@
 #pragma once
 
-// main() of an example program: picks the subcommand, and turns every error into a message and an
-// exit code (cli.hpp) instead of a crash.
+// main() of an example program: picks the subcommand, turns every error into a message on stderr and an
+// exit code (cli.hpp) instead of a crash, and has signals stop it cleanly (interrupt.hpp).
 
 #include <exception>
 #include <iostream>
@@ -12,6 +12,7 @@
 #include "common/commands.hpp"
 #include "common/csv.hpp"
 #include "common/csv_writer.hpp"
+#include "common/interrupt.hpp"
 #include "common/paper_command.hpp"
 #include "common/study_command.hpp"
 
@@ -59,7 +60,11 @@ void printUsage(std::ostream& out) {
       << "      (one row per seed x filter: RMSEs, diverged, status), a table of mean +- sd and median per filter\n"
       << "      and a box plot per scenario (default DIR study_" << Plant::slug << "). docs/studies.md.\n"
       << "\n"
-      << "exit codes: 0 ok, 1 the run failed, 2 malformed input file, 64 bad command line\n";
+      << "Output files are written under temporary names and put in place only when the whole run has\n"
+      << "succeeded: a run that fails or is stopped replaces nothing and leaves no partial file.\n"
+      << "exit codes: 0 ok; 1 the run failed (a filter refused a step, a file could not be written, gnuplot\n"
+      << "failed); 2 malformed input file, or one whose columns are not the plant's; 64 bad command line;\n"
+      << "128 + N stopped by signal N (130 SIGINT, 143 SIGTERM, 129 SIGHUP). Errors go to stderr.\n";
 }
 
 template <class Plant>
@@ -71,6 +76,7 @@ int runProgram(int argc, char** argv) {
   }
   const std::string& command = words[0];
   const std::vector<std::string> flags(words.begin() + 1, words.end());
+  handleInterrupts(Plant::program);
   try {
     if (command == "simulate") return simulateCommand<Plant>(flags);
     if (command == "estimate") return estimateCommand<Plant>(flags);

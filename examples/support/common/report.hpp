@@ -1,14 +1,12 @@
 #pragma once
 
-// The console report of `paper` and `study`: every line goes to stdout and into a table file, and the
-// files written are listed at the end.
+// The console report of `paper` and `study`: every line goes to stdout and into a table file, which
+// ends the run: it joins the run's other files, all are put in place together, and they are listed.
 
-#include <fstream>
 #include <iostream>
 #include <string>
-#include <vector>
 
-#include "common/csv_writer.hpp"
+#include "common/atomic_file.hpp"
 
 namespace mjukf::examples::detail {
 
@@ -20,15 +18,12 @@ class Report {
     text_ += line + "\n";
   }
 
-  /// Writes every line said to `tableFile`, adds it to `written`, and lists the files written.
-  void finish(const std::string& tableFile, std::vector<std::string>& written) const {
-    std::ofstream table(tableFile);
-    table << text_;
-    table.close();
-    if (!table) throw OutputError(tableFile + ": cannot write the file");
-    written.push_back(tableFile);
+  /// Writes every line said to `table`, one of `outputs`, commits them, and lists the files written.
+  void finish(const OutputFile& table, OutputFiles& outputs) const {
+    writeText(table, text_);
+    outputs.commit();
     std::cout << "\nwrote:\n";
-    for (const auto& file : written) std::cout << "  " << file << "\n";
+    for (const auto& file : outputs.committed()) std::cout << "  " << file << "\n";
   }
 
  private:

@@ -17,7 +17,6 @@
 #include <cstdint>
 #include <exception>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <mutex>
 #include <optional>
@@ -29,6 +28,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "common/atomic_file.hpp"
 #include "common/cli.hpp"
 #include "common/csv_writer.hpp"
 #include "common/estimation.hpp"
@@ -242,12 +242,13 @@ void runInParallel(std::size_t count, unsigned jobs, Work&& work, Progress&& pro
 
 inline std::string rmseColumn(const Quantity& q) { return std::string("rmse_") + q.name; }
 
-/// Box plots of each parameter's RMSE per filter in `scenario`, from the study's CSV, leaving out the
-/// diverged runs; a filter none of whose runs is left (`shown[f]` false) gets no box, as gnuplot
-/// refuses a plot without a point.
+/// Box plots of each parameter's RMSE per filter in `scenario`, from the study's CSV (the script's csv1),
+/// leaving out the diverged runs; a filter none of whose runs is left (`shown[f]` false) gets no box, as
+/// gnuplot refuses a plot without a point. The PNG and its script join `outputs`.
 template <class Plant>
-bool drawStudyPlot(Plotter& plotter, const std::string& png, const std::string& csv, const std::string& scenario,
-                   const std::vector<StudyFilter>& filters, const std::vector<bool>& shown, int divergedColumn) {
+void drawStudyPlot(Plotter& plotter, OutputFiles& outputs, const std::string& png, const std::string& csv,
+                   const std::string& scenario, const std::vector<StudyFilter>& filters, const std::vector<bool>& shown,
+                   int divergedColumn) {
   constexpr int p = static_cast<int>(Plant::parameters.size());
   std::string tics;
   for (std::size_t f = 0; f < filters.size(); ++f)
@@ -267,14 +268,14 @@ bool drawStudyPlot(Plotter& plotter, const std::string& png, const std::string& 
     for (std::size_t f = 0; f < filters.size(); ++f)
       if (shown[f])
         plot += format(
-            "%s%s skip 1 using (%zu):((strcol(2) eq \"%s\" && strcol(3) eq \"%s\" && column(%d) == 0) ? column(%d) : "
+            "%scsv1 skip 1 using (%zu):((strcol(2) eq \"%s\" && strcol(3) eq \"%s\" && column(%d) == 0) ? column(%d) : "
             "NaN) lc %zu",
-            plot.empty() ? "plot " : ", \\\n     ", gnuplotQuote(csv).c_str(), f + 1, filters[f].name.c_str(),
-            scenario.c_str(), divergedColumn, 4 + i, f + 1);
+            plot.empty() ? "plot " : ", \\\n     ", f + 1, filters[f].name.c_str(), scenario.c_str(), divergedColumn,
+            4 + i, f + 1);
     s += (plot.empty() ? "set yrange [0:1]\nplot 2 notitle" : plot) + "\n";
   }
   s += "unset multiplot\n";
-  return plotter.drawScript(png, 420 * p + 100, 500, {&csv}, s);
+  plotter.drawScript(outputs, png, 420 * p + 100, 500, {csv}, s);
 }
 
 }  // namespace detail
@@ -302,16 +303,24 @@ int studyCommand(const std::vector<std::string>& words) {
   if (seeds.size() * scenarios.size() > kMaxStudyRuns)
     throw UsageError("--seeds and --scenarios make more than " + std::to_string(kMaxStudyRuns) + " runs");
 
-  // The output directory is checked before any run, so that a long study cannot fail at its end.
+  // The output directory is checked before any run, so that a long study cannot fail at its end: the
+  // temporaries of the CSV and the table are made now (the previous files stay until the commit).
   std::error_code error;
   fs::create_directories(outDir, error);
+  if (error) throw UsageError("--out-dir " + outDir + ": cannot create the directory: " + error.message());
   const auto path = [&](const std::string& name) {
     return (fs::path(outDir) / (std::string(Plant::slug) + "_" + name)).string();
   };
   const std::string csvPath = path("study.csv");
-  if (error || !std::ofstream(csvPath))
-    throw UsageError("--out-dir " + outDir + ": cannot " +
-                     (error ? "create the directory: " + error.message() : "write " + csvPath));
+  OutputFiles outputs;  // every file of the study, put in place together at its end (report.finish)
+  const OutputFile* csvFile = nullptr;
+  const OutputFile* tableFile = nullptr;
+  try {
+    csvFile = &outputs.add(csvPath);
+    tableFile = &outputs.add(path("study_table.txt"));
+  } catch (const OutputError& e) {
+    throw UsageError(std::string("--out-dir ") + outDir + ": " + e.what());
+  }
 
   // Run r is scenario r / seeds, seed r % seeds; results[r][f] is filter f's result on it.
   const std::size_t runs = seeds.size() * scenarios.size();
@@ -362,7 +371,7 @@ int studyCommand(const std::vector<std::string>& words) {
   for (const auto& q : Plant::parameters) header.push_back(std::string("final_") + q.name);
   const int divergedColumn = 4 + p;
   {
-    CsvWriter csv(csvPath, header);
+    CsvWriter csv(*csvFile, header);
     for (std::size_t r = 0; r < runs; ++r)
       for (std::size_t f = 0; f < filters.size(); ++f) {
         const auto& result = results[r][f];
@@ -387,7 +396,6 @@ int studyCommand(const std::vector<std::string>& words) {
       kDivergenceBound));
   say("  of the truth and the first guess's error");
   Plotter plotter;
-  std::vector<std::string> written{csvPath};
   for (std::size_t s = 0; s < scenarios.size(); ++s) {
     say("");
     say(format("scenario %s", scenarios[s].name.c_str()));
@@ -415,11 +423,10 @@ int studyCommand(const std::vector<std::string>& words) {
       say(line + format(" %ld/%zu", diverged, seeds.size()));
       shown.push_back(diverged < long(seeds.size()));
     }
-    const std::string png = path("study_" + scenarios[s].name + ".png");
-    if (detail::drawStudyPlot<Plant>(plotter, png, csvPath, scenarios[s].name, filters, shown, divergedColumn))
-      written.push_back(png);
+    detail::drawStudyPlot<Plant>(plotter, outputs, path("study_" + scenarios[s].name + ".png"), csvPath,
+                                 scenarios[s].name, filters, shown, divergedColumn);
   }
-  report.finish(path("study_table.txt"), written);
+  report.finish(*tableFile, outputs);
   return kExitOk;
 }
 
