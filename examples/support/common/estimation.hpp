@@ -5,6 +5,8 @@
 // does not run), and the estimates of every row.
 
 #include <chrono>
+#include <optional>
+#include <type_traits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -62,9 +64,31 @@ struct EstimateRun {
   std::vector<typename Model::Param> parameters;
   paper::ScheduleOutcome outcome;
   double loopSeconds = 0;  ///< wall time of the schedule loop alone
+  /// The filter's own covariance of θ̂ at the end (JUKF's θ block, the dual's P^θ); empty for a filter
+  /// that reports none.
+  std::optional<Eigen::Matrix<typename Model::Scalar, Model::ParamDim, Model::ParamDim>> finalParameterCovariance;
 };
 
 namespace detail {
+
+template <class Filter, class = void>
+struct HasParameterCovariance : std::false_type {};
+template <class Filter>
+struct HasParameterCovariance<Filter, std::void_t<decltype(std::declval<const Filter&>().parameterCovariance())>>
+    : std::true_type {};
+
+// The covariance of θ̂ a filter reports: the dual's P^θ, JUKF's θ block of P; none for the others.
+template <class Filter>
+std::optional<Eigen::Matrix<typename Filter::Scalar, Filter::ParamDim, Filter::ParamDim>> parameterCovarianceOf(
+    const Filter& filter) {
+  constexpr int n = Filter::StateDim, p = Filter::ParamDim;
+  if constexpr (HasParameterCovariance<Filter>::value)
+    return filter.parameterCovariance();
+  else if constexpr (std::decay_t<decltype(filter.covariance())>::RowsAtCompileTime == n + p)
+    return filter.covariance().template bottomRightCorner<p, p>();
+  else
+    return std::nullopt;
+}
 
 template <class Filter, class Model>
 EstimateRun<Model> runSchedule(Filter& filter, const PlantData<Model>& data, int measurementEvery) {
@@ -82,6 +106,7 @@ EstimateRun<Model> runSchedule(Filter& filter, const PlantData<Model>& data, int
         run.parameters[static_cast<std::size_t>(k)] = f.parameters();
       });
   run.loopSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  run.finalParameterCovariance = parameterCovarianceOf(filter);
   if (run.outcome.status != Status::Ok) {  // keep only the rows that were estimated
     run.state.resize(static_cast<std::size_t>(run.outcome.row));
     run.parameters.resize(static_cast<std::size_t>(run.outcome.row));

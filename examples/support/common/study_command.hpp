@@ -28,6 +28,8 @@
 #include <type_traits>
 #include <vector>
 
+#include <Eigen/Cholesky>
+
 #include "common/atomic_file.hpp"
 #include "common/cli.hpp"
 #include "common/csv_writer.hpp"
@@ -44,6 +46,10 @@ namespace mjukf::examples {
 /// The most runs (seeds × scenarios) one study may have: each keeps a few numbers per filter, but a
 /// typo such as 1-10000000000 should be refused, not attempted.
 constexpr std::size_t kMaxStudyRuns = 1'000'000;
+
+/// Q_θ of the dual UKF in a parameter-change scenario: JUKF's random walk of the paper's robot, which
+/// lets it follow the change (the presets assume constant parameters, Q_θ = 0).
+constexpr double kChangeParameterProcessNoise = 1e-5;
 
 /// A run diverged when a final parameter error exceeds this multiple of its scale (see divergedRun()).
 constexpr double kDivergenceBound = 1.0;
@@ -145,18 +151,21 @@ struct StudyScenario {
   TrueParameters<Param> truth;
   double duration;
   std::optional<double> scaling;
+  /// Q_θ of the dual UKF where the parameters change (its presets have none: constant parameters).
+  std::optional<double> parameterProcessNoise;
 };
 
 template <class Plant>
 std::vector<StudyScenario<typename Plant::Param>> studyScenarios() {
   using Experiment = typename Plant::Experiment;
   std::vector<StudyScenario<typename Plant::Param>> scenarios{
-      {"static", {Experiment::Model::trueParameters()}, double(Experiment::duration), std::nullopt}};
+      {"static", {Experiment::Model::trueParameters()}, double(Experiment::duration), std::nullopt, std::nullopt}};
   if (const auto change = Plant::parameterChange())
     scenarios.push_back({"change",
                          {Experiment::Model::trueParameters(), change->after, change->at},
                          change->duration,
-                         change->scaling});
+                         change->scaling,
+                         kChangeParameterProcessNoise});
   return scenarios;
 }
 
@@ -165,6 +174,8 @@ template <int ParamDim>
 struct StudyResult {
   std::array<double, ParamDim> rmse{};
   std::array<double, ParamDim> finalEstimate{};
+  /// (θ̂ − θ)ᵀ P_θ⁻¹ (θ̂ − θ) at the last row, with the filter's own P_θ; NaN for a filter that reports none.
+  double nees = std::nan("");
   bool diverged = false;
   Status status = Status::Ok;
   long stoppedAtRow = 0;  ///< the refused row, or the last row when the run went through
@@ -194,6 +205,8 @@ template <class Experiment, class Param>
 FilterSetup<Experiment> studySetup(const StudyFilter& filter, const StudyScenario<Param>& scenario) {
   auto setup = FilterSetup<Experiment>::paper(filter.kind);
   if (scenario.scaling) setup.modifiedJointUkf.scaling = *scenario.scaling;
+  if (scenario.parameterProcessNoise)
+    setup.dualUkf.parameterProcessNoise.diagonal().setConstant(*scenario.parameterProcessNoise);
   if constexpr (HasAutomaticModes<decltype(setup.modifiedJointUkf)>::value) {
     if (filter.automatic) {
       setup.modifiedJointUkf.automaticTransformation = true;
@@ -347,6 +360,12 @@ int studyCommand(const std::vector<std::string>& words) {
             result.finalEstimate[std::size_t(i)] = run.parameters.empty() ? std::nan("") : run.parameters.back()(i);
           }
           result.diverged = detail::divergedRun(run, data, setup.initialParameters);
+          if (run.finalParameterCovariance && !run.parameters.empty() &&
+              run.outcome.status == Status::Ok) {
+            const typename Model::Param error = run.parameters.back() - data.parameterTruth.back();
+            const auto factor = run.finalParameterCovariance->llt();
+            if (factor.info() == Eigen::Success) result.nees = error.dot(factor.solve(error));
+          }
           result.status = run.outcome.status;
           result.stoppedAtRow = run.outcome.row;
           result.repairs = run.outcome.repairs;
@@ -369,6 +388,7 @@ int studyCommand(const std::vector<std::string>& words) {
   for (const auto& q : Plant::parameters) header.push_back(detail::rmseColumn(q));
   header.insert(header.end(), {"diverged", "status", "stopped_at_row", "repairs", "rejected"});
   for (const auto& q : Plant::parameters) header.push_back(std::string("final_") + q.name);
+  header.push_back("nees");
   const int divergedColumn = 4 + p;
   {
     CsvWriter csv(*csvFile, header);
@@ -380,6 +400,7 @@ int studyCommand(const std::vector<std::string>& words) {
         csv << double(result.diverged) << std::string(toString(result.status)) << double(result.stoppedAtRow)
             << double(result.repairs) << double(result.rejected);
         for (double v : result.finalEstimate) csv << v;
+        csv << result.nees;
         csv.endRow();
       }
     csv.close();
@@ -402,7 +423,7 @@ int studyCommand(const std::vector<std::string>& words) {
     std::string head = format("%-11s", "filter");
     for (const auto& q : Plant::parameters)
       head += format(" %-30s %-11s", ("RMSE " + std::string(q.name) + " mean +- sd").c_str(), "median");
-    say(head + " diverged");
+    say(head + " diverged  mean NEES of the final θ̂ [95 % band]");
     std::vector<bool> shown;  // whether the filter has a run that did not diverge, for the box plot
     for (std::size_t f = 0; f < filters.size(); ++f) {
       std::string line = format("%-11s", filters[f].name.c_str());
@@ -420,7 +441,19 @@ int studyCommand(const std::vector<std::string>& words) {
                              format("%.4g +- %.3g", detail::mean(values), detail::standardDeviation(values)).c_str(),
                              detail::median(values));
       }
-      say(line + format(" %ld/%zu", diverged, seeds.size()));
+      // The mean over the runs of the final NEES is χ²(N p) / N when the filter's P_θ is right.
+      std::vector<double> nees;
+      for (std::size_t k = 0; k < seeds.size(); ++k) {
+        const double v = results[s * seeds.size() + k][f].nees;
+        if (std::isfinite(v)) nees.push_back(v);
+      }
+      const double dof = double(nees.size()) * p;
+      const std::string consistency =
+          nees.empty() ? std::string("  -")
+                       : format("  %.3g [%.3g, %.3g]", detail::mean(nees),
+                                detail::chiSquareQuantile(dof, -1.959964) / double(nees.size()),
+                                detail::chiSquareQuantile(dof, 1.959964) / double(nees.size()));
+      say(line + format(" %ld/%zu", diverged, seeds.size()) + consistency);
       shown.push_back(diverged < long(seeds.size()));
     }
     detail::drawStudyPlot<Plant>(plotter, outputs, path("study_" + scenarios[s].name + ".png"), csvPath,

@@ -70,13 +70,13 @@ struct Settings2019 {
     return s;
   }
 
-  /// The state filter as the UKF's; the parameter filter starts from JUKF's θ block and observes with the
-  /// state filter's innovation covariance (no extra parameterObservationNoise).
+  /// The state filter as the UKF's; the parameter filter starts from JUKF's P^θ₀ with Q_θ = 0 (the
+  /// parameters are constant) and observes with the state filter's innovation covariance (no extra
+  /// parameterObservationNoise).
   DualUkfSettingsFor<Model> dualUkf() const {
     DualUkfSettingsFor<Model> s;
     static_cast<UnscentedSettings<Scalar, Model::StateDim, Model::MeasDim>&>(s) = ukf();
     s.initialParameterCovariance.diagonal().setConstant(parameterP0);
-    s.parameterProcessNoise.diagonal().setConstant(parameterQ);
     return s;
   }
 };
