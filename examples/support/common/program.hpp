@@ -20,10 +20,10 @@ namespace mjukf::examples {
 template <class Plant>
 void printUsage(std::ostream& out) {
   const bool change = Plant::parameterChange().has_value();
-  constexpr bool relativeNoise = hasRelativeNoise<typename Plant::Experiment>;
+  constexpr bool snrNoise = hasSnrNoise<typename Plant::Experiment>;
   out << "usage: " << Plant::program << " SUBCOMMAND [--flag value ...]   (" << Plant::title << ")\n"
       << "\n"
-      << "  simulate --out FILE [--duration S] [--seed N]" << (relativeNoise ? "" : " [--snr-db DB]")
+      << "  simulate --out FILE [--duration S] [--seed N]" << (snrNoise ? " [--snr-db DB]" : "")
       << (change ? " [--change-at T]" : "") << "\n"
       << "      Simulates the plant (" << Plant::simulation << ") and writes\n"
       << "      t, y1..ym, x1_true..xn_true, theta1_true..thetap_true, one row per step.\n"
