@@ -50,8 +50,7 @@ struct PredatorPreyPlant {
   static constexpr const char* slug = "predator_prey";
   static constexpr const char* timeUnit = "year";
   static constexpr const char* simulation = "RK4, h = 0.1 year, 100 years, prey count noise std 0.3 thousand";
-  static constexpr std::array<Quantity, 2> parameters{
-      {{"delta", "δ", "1/(year thousand)"}, {"gamma", "γ", "1/year"}}};
+  static constexpr std::array<Quantity, 2> parameters{{{"delta", "δ", "1/(year thousand)"}, {"gamma", "γ", "1/year"}}};
   static std::optional<ParameterChange<Param>> parameterChange() { return std::nullopt; }
 };
 

@@ -44,8 +44,7 @@ double averageInput(const Model& model, double period, double dt) {
 // encoder reads the angle alone. The voltage has mean zero over its 2 s period.
 TEST(DcMotor, SteadySpeedAndOppositeSensitivities) {
   const DcMotor<double> model;
-  for (const DcMotor<double>::Param& theta :
-       {DcMotor<double>::trueParameters(), DcMotor<double>::Param(0.02, 5e-4)}) {
+  for (const DcMotor<double>::Param& theta : {DcMotor<double>::trueParameters(), DcMotor<double>::Param(0.02, 5e-4)}) {
     const double k = theta(0), b = theta(1), u = 12;
     const double steady = k * u / (b * model.resistance + k * k);
     const DcMotor<double>::State x(3.0, steady);
@@ -96,7 +95,8 @@ TEST(LotkaVolterra, ConservedQuantityAndEquilibrium) {
   const LotkaVolterra<double> model;
   const auto theta = LotkaVolterra<double>::trueParameters();
   for (const LotkaVolterra<double>::State& x :
-       {LotkaVolterra<double>::State(10, 5), LotkaVolterra<double>::State(0.7, 2.2), LotkaVolterra<double>::State(13, 0.9)}) {
+       {LotkaVolterra<double>::State(10, 5), LotkaVolterra<double>::State(0.7, 2.2),
+        LotkaVolterra<double>::State(13, 0.9)}) {
     const auto dx = model.derivative(0, x, {}, theta);
     const double gradient0 = theta(0) - theta(1) / x(0);
     const double gradient1 = model.predation - model.preyGrowth / x(1);

@@ -35,7 +35,8 @@ void printUsage(std::ostream& out) {
       << "      Settings (diagonals take one number or a comma-separated list):\n"
       << "      --every N  --step H  --rmse-from ROW  --x0 LIST  --theta0 LIST  --alpha A  --beta B  --kappa K\n"
       << "      --p0 DIAG  --q DIAG  --r DIAG (dual: of its state filter; alpha, beta, kappa: of both filters);\n"
-      << "      mjukf only: --xi X|LIST (one for every parameter, or one each)  --p-theta LIST  --transform LIST (row-major);\n"
+      << "      mjukf only: --xi X|LIST (one for every parameter, or one each)  --p-theta LIST  --transform LIST "
+         "(row-major);\n"
       << "      dual only: --ordering prior|updated (the state's time update with the prior or the corrected\n"
       << "      parameters; default prior)  --r-theta DIAG (added to R in the parameter filter's update)\n"
       << "\n";

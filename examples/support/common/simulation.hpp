@@ -99,14 +99,14 @@ PlantData<Model> simulatePlant(const Model& model, const SimulationOptions<Model
 
   const bool relative = options.relativeNoise > 0;
   const bool absolute = options.absoluteNoise.has_value();
-  const double sigma = relative || absolute || std::isinf(options.snrDb)
-                           ? 0.0
-                           : noiseStandardDeviation(data.stateTruth, options.snrDb);
+  const double sigma =
+      relative || absolute || std::isinf(options.snrDb) ? 0.0 : noiseStandardDeviation(data.stateTruth, options.snrDb);
   std::mt19937_64 random(options.seed);
   std::normal_distribution<double> noise(0.0, 1.0);
   data.y.resize(static_cast<std::size_t>(rows));
   for (std::size_t k = 0; k < data.y.size(); ++k) {
-    data.y[k] = measureModel(model, data.stateTruth[k], inputAt(model, static_cast<double>(k) * h), data.parameterTruth[k]);
+    data.y[k] =
+        measureModel(model, data.stateTruth[k], inputAt(model, static_cast<double>(k) * h), data.parameterTruth[k]);
     for (int c = 0; c < Model::MeasDim; ++c)
       data.y[k](c) += (absolute   ? double((*options.absoluteNoise)(c))
                        : relative ? options.relativeNoise * std::abs(data.y[k](c))

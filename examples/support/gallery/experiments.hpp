@@ -106,7 +106,9 @@ struct GalleryExperiment {
 
  private:
   static State stateInitialVariance() { return Derived::initialUncertainty().array().square().matrix(); }
-  static State stateProcessNoise() { return Scalar(kStateNoiseFraction) * Derived::typicalSize().array().square().matrix(); }
+  static State stateProcessNoise() {
+    return Scalar(kStateNoiseFraction) * Derived::typicalSize().array().square().matrix();
+  }
   static Meas measurementVariance() { return Derived::noiseStandardDeviation().array().square().matrix(); }
   static Param parameterInitialVariance() { return initialParameters().array().square().matrix(); }
 
@@ -183,8 +185,7 @@ struct BatteryExperiment : GalleryExperiment<BatteryExperiment<Scalar>, models::
 /// (paper/schedule.hpp), and with 10 steps of 0.01 year per count JUKF diverged on every seed tried
 /// (its parameter–state correlations grew over a tenth of the interval the states moved over).
 template <class Scalar = double>
-struct PredatorPreyExperiment
-    : GalleryExperiment<PredatorPreyExperiment<Scalar>, models::LotkaVolterra<Scalar>> {
+struct PredatorPreyExperiment : GalleryExperiment<PredatorPreyExperiment<Scalar>, models::LotkaVolterra<Scalar>> {
   /// The plant's vectors.
   using State = typename models::LotkaVolterra<Scalar>::State;
   /// The measurement vector.

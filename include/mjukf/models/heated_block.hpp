@@ -45,7 +45,7 @@ struct HeatedBlock {
   /// u = (P) in W.
   using Input = Eigen::Matrix<Scalar, InputDim, 1>;
 
-  Scalar heaterCapacity = Scalar(2);   ///< C_h, heat capacity of the element (J/K)
+  Scalar heaterCapacity = Scalar(2);    ///< C_h, heat capacity of the element (J/K)
   Scalar blockCapacity = Scalar(2000);  ///< C_b, heat capacity of the block (J/K)
   Scalar ambient = Scalar(20);          ///< T_a, room temperature (°C)
 
