@@ -20,85 +20,59 @@ namespace {
 using mjukf::examples::ParameterChange;
 using mjukf::examples::Quantity;
 
-struct DcMotorPlant {
-  using Experiment = mjukf::gallery::DcMotorExperiment<double>;
-  using Param = Experiment::Param;
+// What every gallery plant's description (common/plant.hpp) shares: its experiment, no parameter change.
+template <class Experiment_>
+struct GalleryPlant {
+  using Experiment = Experiment_;
+  using Param = typename Experiment::Param;
+  static std::optional<ParameterChange<Param>> parameterChange() { return std::nullopt; }
+};
+
+struct DcMotorPlant : GalleryPlant<mjukf::gallery::DcMotorExperiment<double>> {
   static constexpr const char* program = "mjukf_gallery dc_motor";
   static constexpr const char* title = "DC motor measured by its angle (gallery)";
   static constexpr const char* slug = "dc_motor";
+  static constexpr const char* character = "one measured output, parameters of opposite-sign sensitivity";
   static constexpr const char* simulation = "I-TR-BDF2, h = 1 ms, 20 s from rest, angle noise std 5 mrad";
   static constexpr std::array<Quantity, 2> parameters{{{"K", "K", "N m/A"}, {"b", "b", "N m s/rad"}}};
-  static std::optional<ParameterChange<Param>> parameterChange() { return std::nullopt; }
 };
 
-struct BatteryPlant {
-  using Experiment = mjukf::gallery::BatteryExperiment<double>;
-  using Param = Experiment::Param;
+struct BatteryPlant : GalleryPlant<mjukf::gallery::BatteryExperiment<double>> {
   static constexpr const char* program = "mjukf_gallery battery";
   static constexpr const char* title = "Battery, discrete-time Thevenin circuit (gallery)";
   static constexpr const char* slug = "battery";
+  static constexpr const char* character = "discrete time, a measurement that depends on the input";
   static constexpr const char* simulation = "discrete time, 1 s samples, 1 h from 90% charge, voltage noise std 2 mV";
   static constexpr std::array<Quantity, 2> parameters{{{"R0", "R_0", "Ohm"}, {"R1", "R_1", "Ohm"}}};
-  static std::optional<ParameterChange<Param>> parameterChange() { return std::nullopt; }
 };
 
-struct PredatorPreyPlant {
-  using Experiment = mjukf::gallery::PredatorPreyExperiment<double>;
-  using Param = Experiment::Param;
+struct PredatorPreyPlant : GalleryPlant<mjukf::gallery::PredatorPreyExperiment<double>> {
   static constexpr const char* program = "mjukf_gallery predator_prey";
   static constexpr const char* title = "Predator and prey, prey measured (gallery)";
   static constexpr const char* slug = "predator_prey";
+  static constexpr const char* character = "an unmeasured state guessed 2.5x wrong, its parameters";
   static constexpr const char* timeUnit = "year";
   static constexpr const char* simulation = "RK4, h = 0.1 year, 100 years, prey count noise std 0.3 thousand";
   static constexpr std::array<Quantity, 2> parameters{{{"delta", "δ", "1/(year thousand)"}, {"gamma", "γ", "1/year"}}};
-  static std::optional<ParameterChange<Param>> parameterChange() { return std::nullopt; }
 };
 
-struct HeatedBlockPlant {
-  using Experiment = mjukf::gallery::HeatedBlockExperiment<double>;
-  using Param = Experiment::Param;
+struct HeatedBlockPlant : GalleryPlant<mjukf::gallery::HeatedBlockExperiment<double>> {
   static constexpr const char* program = "mjukf_gallery heated_block";
   static constexpr const char* title = "Heated block, fast and slow (gallery)";
   static constexpr const char* slug = "heated_block";
+  static constexpr const char* character = "fast (0.1 s) and slow (200 s) dynamics";
   static constexpr const char* simulation = "I-TR-BDF2, h = 20 ms, 1800 s, temperature noise std 0.1 K";
   static constexpr std::array<Quantity, 2> parameters{{{"G_hb", "G_{hb}", "W/K"}, {"G_ba", "G_{ba}", "W/K"}}};
-  static std::optional<ParameterChange<Param>> parameterChange() { return std::nullopt; }
 };
 
-struct DrugInfusionPlant {
-  using Experiment = mjukf::gallery::DrugInfusionExperiment<double>;
-  using Param = Experiment::Param;
+struct DrugInfusionPlant : GalleryPlant<mjukf::gallery::DrugInfusionExperiment<double>> {
   static constexpr const char* program = "mjukf_gallery drug_infusion";
   static constexpr const char* title = "Drug infusion, Michaelis-Menten elimination (gallery)";
   static constexpr const char* slug = "drug_infusion";
+  static constexpr const char* character = "a parameter that enters nonlinearly (K_m)";
   static constexpr const char* timeUnit = "h";
   static constexpr const char* simulation = "I-TR-BDF2, h = 0.01 h, 72 h, concentration noise std 0.2 mg/L";
   static constexpr std::array<Quantity, 2> parameters{{{"V_max", "V_{max}", "mg/(L h)"}, {"K_m", "K_m", "mg/L"}}};
-  static std::optional<ParameterChange<Param>> parameterChange() { return std::nullopt; }
-};
-
-// What each plant is in the gallery for, for the list of plants.
-template <class Plant>
-struct Character;
-template <>
-struct Character<DcMotorPlant> {
-  static constexpr const char* text = "one measured output, parameters of opposite-sign sensitivity";
-};
-template <>
-struct Character<BatteryPlant> {
-  static constexpr const char* text = "discrete time, a measurement that depends on the input";
-};
-template <>
-struct Character<PredatorPreyPlant> {
-  static constexpr const char* text = "an unmeasured state guessed 2.5x wrong, its parameters";
-};
-template <>
-struct Character<HeatedBlockPlant> {
-  static constexpr const char* text = "fast (0.1 s) and slow (200 s) dynamics";
-};
-template <>
-struct Character<DrugInfusionPlant> {
-  static constexpr const char* text = "a parameter that enters nonlinearly (K_m)";
 };
 
 template <class... Plants>
@@ -110,7 +84,7 @@ struct Gallery {
         << "(docs/studies.md, \"The gallery\"). PLANT is one of:\n"
         << "\n";
     ((out << "  " << Plants::slug << std::string(15 - std::strlen(Plants::slug), ' ') << Plants::title << "\n"
-          << std::string(17, ' ') << Character<Plants>::text << "\n"),
+          << std::string(17, ' ') << Plants::character << "\n"),
      ...);
     out << "\n"
         << "SUBCOMMAND is simulate, estimate or study, as for the other example programs;\n"
