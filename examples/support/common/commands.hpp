@@ -26,7 +26,7 @@ int simulateCommand(const std::vector<std::string>& words) {
   using Experiment = typename Plant::Experiment;
   using Model = typename Experiment::Model;
   std::set<std::string> known{"--out", "--duration", "--seed", "--change-at"};
-  if (!hasRelativeNoise<Experiment>) known.insert("--snr-db");  // the 2019 systems' noise has no SNR
+  if (hasSnrNoise<Experiment>) known.insert("--snr-db");  // the 2019 systems' and the gallery's noise has none
   const Arguments args(words, known);
   const std::string out = args.requiredText("--out");
 
@@ -54,8 +54,18 @@ int simulateCommand(const std::vector<std::string>& words) {
     std::snprintf(noise, sizeof noise, "noise std %g |x_i|", options.relativeNoise);
   else
     std::snprintf(noise, sizeof noise, "SNR %g dB", options.snrDb);
-  std::printf("simulated %s: %ld rows (%.6g s at h = %g s), %s, seed %llu -> %s\n", Plant::title, data.rows(),
-              options.duration, options.stepSize, noise, static_cast<unsigned long long>(options.seed), out.c_str());
+  std::string noiseText = noise;
+  if (options.absoluteNoise) {  // the standard deviation of each measured component
+    noiseText = "noise std";
+    for (int c = 0; c < Model::MeasDim; ++c) {
+      std::snprintf(noise, sizeof noise, "%s %g", c > 0 ? "," : "", double((*options.absoluteNoise)(c)));
+      noiseText += noise;
+    }
+  }
+  const char* unit = timeUnit<Plant>;
+  std::printf("simulated %s: %ld rows (%.6g %s at h = %g %s), %s, seed %llu -> %s\n", Plant::title, data.rows(),
+              options.duration, unit, options.stepSize, unit, noiseText.c_str(),
+              static_cast<unsigned long long>(options.seed), out.c_str());
   return kExitOk;
 }
 
@@ -190,21 +200,22 @@ int estimateCommand(const std::vector<std::string>& words) {
   }
 
   const bool updated = setup.dualUkf.ordering == DualUkfOrdering::UpdatedParameters;
-  std::printf("%s%s on %s: %ld rows, h = %g s, a measurement every %d steps\n", filterName(setup.kind),
+  const char* unit = timeUnit<Plant>;
+  std::printf("%s%s on %s: %ld rows, h = %g %s, a measurement every %d steps\n", filterName(setup.kind),
               setup.kind != FilterKind::DualUkf ? ""
               : updated                         ? " (ordering: updated)"
                                                 : " (ordering: prior)",
-              dataPath.c_str(), data.rows(), h, setup.measurementEvery);
+              dataPath.c_str(), data.rows(), h, unit, setup.measurementEvery);
   // A run that stopped writes nothing: its rows 0…k−1 would look like a whole file of a shorter run.
   if (run.outcome.status != Status::Ok)
-    throw std::runtime_error(detail::format("the filter refused the step to row %ld (t = %g s): %s; %s not written",
-                                            run.outcome.row, double(run.outcome.row) * h, toString(run.outcome.status),
-                                            out.c_str()));
+    throw std::runtime_error(detail::format("the filter refused the step to row %ld (t = %g %s): %s; %s not written",
+                                            run.outcome.row, double(run.outcome.row) * h, unit,
+                                            toString(run.outcome.status), out.c_str()));
   writeEstimates(file, run, h);
   outputs.commit();
   // Short runs have no rows past the paper's start of the RMSE window: take all of them, and say so.
   const long from = rmseFrom < data.rows() ? rmseFrom : 0;
-  std::printf("parameter RMSE over rows >= %ld (t >= %g s)%s, truth: %s\n", from, double(from) * h,
+  std::printf("parameter RMSE over rows >= %ld (t >= %g %s)%s, truth: %s\n", from, double(from) * h, unit,
               from != rmseFrom ? " (the run is shorter than --rmse-from)" : "",
               data.parameterTruthFromFile ? "theta*_true columns" : "the plant's true constants");
   const auto rmse = parameterRmse(run, data, from);

@@ -3,20 +3,21 @@
 // What the example programs read from an experiment's settings (paper/experiments.hpp,
 // paper/systems_2019.hpp) beyond the filters' presets, with the paper's plants' choices where an
 // experiment says nothing: the integrator (I-TR-BDF2), the true initial state (the filters' x̂₀) and the
-// measurement noise (white, 30 dB SNR; or, where the experiment gives `relativeNoise`, std ρ·|xᵢ|).
+// measurement noise (white, 30 dB SNR; or, where the experiment gives `relativeNoise`, std ρ·|xᵢ|; or,
+// where it gives `static Meas noiseStandardDeviation()`, that standard deviation per measured component).
 
 #include <cstdint>
 #include <type_traits>
 
 #include "common/simulation.hpp"
-#include "mjukf/integrators/i_tr_bdf2.hpp"
+#include "mjukf/model.hpp"
 
 namespace mjukf::examples {
 
 namespace detail {
 template <class E, class = void>
 struct IntegratorOf {
-  using type = ITrBdf2<typename E::Model::Scalar>;
+  using type = DefaultIntegrator<typename E::Model>;
 };
 template <class E>
 struct IntegratorOf<E, std::void_t<typename E::Integrator>> {
@@ -30,16 +31,29 @@ template <class E, class = void>
 struct HasRelativeNoise : std::false_type {};
 template <class E>
 struct HasRelativeNoise<E, std::void_t<decltype(E::relativeNoise)>> : std::true_type {};
+template <class E, class = void>
+struct HasAbsoluteNoise : std::false_type {};
+template <class E>
+struct HasAbsoluteNoise<E, std::void_t<decltype(E::noiseStandardDeviation())>> : std::true_type {};
 }  // namespace detail
 
-/// The integrator the plant is simulated with and the filters run: I-TR-BDF2 unless the experiment
-/// names another (`using Integrator = …`).
+/// The integrator the plant is simulated with and the filters run: I-TR-BDF2 (none for a
+/// discrete-time model, model.hpp) unless the experiment names another (`using Integrator = …`).
 template <class Experiment>
 using ExperimentIntegrator = typename detail::IntegratorOf<Experiment>::type;
 
 /// True when the experiment's noise is relative to the signal (`relativeNoise`), not set by an SNR.
 template <class Experiment>
 inline constexpr bool hasRelativeNoise = detail::HasRelativeNoise<Experiment>::value;
+
+/// True when the experiment gives the noise's standard deviation per measured component
+/// (`noiseStandardDeviation()`), not an SNR.
+template <class Experiment>
+inline constexpr bool hasAbsoluteNoise = detail::HasAbsoluteNoise<Experiment>::value;
+
+/// True when the experiment's noise is set by an SNR (`simulate --snr-db`): neither relative nor absolute.
+template <class Experiment>
+inline constexpr bool hasSnrNoise = !hasRelativeNoise<Experiment> && !hasAbsoluteNoise<Experiment>;
 
 /// The state the simulation starts from: `trueInitialState()`, else the filters' x̂₀.
 template <class Experiment>
@@ -62,6 +76,7 @@ SimulationOptions<typename Experiment::Model> experimentSimulation(
   options.initialState = trueInitialState<Experiment>();
   options.parameters = truth;
   if constexpr (hasRelativeNoise<Experiment>) options.relativeNoise = Experiment::relativeNoise;
+  if constexpr (hasAbsoluteNoise<Experiment>) options.absoluteNoise = Experiment::noiseStandardDeviation();
   return options;
 }
 

@@ -14,6 +14,10 @@
 //   static constexpr std::array<Quantity, ParamDim> parameters;
 //   static std::optional<ParameterChange<Param>> parameterChange();
 //
+// optionally the unit of the model's time, for the messages (seconds unless it says otherwise):
+//
+//   static constexpr const char* timeUnit;                  // "year"
+//
 // and, for the paper's plants only (the `paper` subcommand exists where they are given):
 //
 //   static constexpr std::array<Quantity, StateDim> states;  // for the state figures
@@ -63,5 +67,20 @@ struct HasPaperTable<Plant, std::void_t<decltype(Plant::published), decltype(Pla
 /// True for the paper's plants, which have a published table to compare with (`paper` subcommand).
 template <class Plant>
 inline constexpr bool hasPaperTable = detail::HasPaperTable<Plant>::value;
+
+namespace detail {
+template <class Plant, class = void>
+struct TimeUnit {
+  static constexpr const char* value = "s";
+};
+template <class Plant>
+struct TimeUnit<Plant, std::void_t<decltype(Plant::timeUnit)>> {
+  static constexpr const char* value = Plant::timeUnit;
+};
+}  // namespace detail
+
+/// The unit of the plant's model time in messages: `Plant::timeUnit`, or "s".
+template <class Plant>
+inline constexpr const char* timeUnit = detail::TimeUnit<Plant>::value;
 
 }  // namespace mjukf::examples

@@ -21,10 +21,10 @@ namespace mjukf::examples {
 template <class Plant>
 void printUsage(std::ostream& out) {
   const bool change = Plant::parameterChange().has_value();
-  constexpr bool relativeNoise = hasRelativeNoise<typename Plant::Experiment>;
+  constexpr bool snrNoise = hasSnrNoise<typename Plant::Experiment>;
   out << "usage: " << Plant::program << " SUBCOMMAND [--flag value ...]   (" << Plant::title << ")\n"
       << "\n"
-      << "  simulate --out FILE [--duration S] [--seed N]" << (relativeNoise ? "" : " [--snr-db DB]")
+      << "  simulate --out FILE [--duration S] [--seed N]" << (snrNoise ? " [--snr-db DB]" : "")
       << (change ? " [--change-at T]" : "") << "\n"
       << "      Simulates the plant (" << Plant::simulation << ") and writes\n"
       << "      t, y1..ym, x1_true..xn_true, theta1_true..thetap_true, one row per step.\n"
@@ -36,7 +36,8 @@ void printUsage(std::ostream& out) {
       << "      Settings (diagonals take one number or a comma-separated list):\n"
       << "      --every N  --step H  --rmse-from ROW  --x0 LIST  --theta0 LIST  --alpha A  --beta B  --kappa K\n"
       << "      --p0 DIAG  --q DIAG  --r DIAG (dual: of its state filter; alpha, beta, kappa: of both filters);\n"
-      << "      mjukf only: --xi X|LIST (one for every parameter, or one each)  --p-theta LIST  --transform LIST (row-major);\n"
+      << "      mjukf only: --xi X|LIST (one for every parameter, or one each)  --p-theta LIST  --transform LIST "
+         "(row-major);\n"
       << "      dual only: --ordering prior|updated (the state's time update with the prior or the corrected\n"
       << "      parameters; default prior)  --r-theta DIAG (added to the parameter filter's observation noise)\n"
       << "\n";

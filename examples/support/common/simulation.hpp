@@ -4,11 +4,13 @@
 // step h from x₀, then white Gaussian noise of one standard deviation for every channel,
 // σ = sqrt(var(all states) / 10^(SNR/10)), the variance taken over every channel and sample together.
 // The 2019 systems (paper/systems_2019.hpp) are integrated with their own integrator and take
-// noise relative to the signal instead: std ρ·|yᵢ| for each component of each sample.
+// noise relative to the signal instead: std ρ·|yᵢ| for each component of each sample. The gallery's
+// plants (gallery/experiments.hpp) give an absolute standard deviation per measured component.
 
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <optional>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -41,6 +43,8 @@ struct SimulationOptions {
   std::uint64_t seed = 1;
   double snrDb = 30;         ///< +inf for noise-free measurements
   double relativeNoise = 0;  ///< > 0: noise of std relativeNoise·|yᵢ| per component, in place of the SNR
+  /// Given: noise of std (*absoluteNoise)ᵢ on measured component i, in place of the SNR.
+  std::optional<typename Model::Meas> absoluteNoise;
   typename Model::State initialState = Model::State::Zero();
   TrueParameters<typename Model::Param> parameters{Model::trueParameters()};
 };
@@ -94,15 +98,20 @@ PlantData<Model> simulatePlant(const Model& model, const SimulationOptions<Model
       [&](long k, double, const State& x) { data.stateTruth[static_cast<std::size_t>(k)] = x; });
 
   const bool relative = options.relativeNoise > 0;
+  const bool absolute = options.absoluteNoise.has_value();
   const double sigma =
-      relative || std::isinf(options.snrDb) ? 0.0 : noiseStandardDeviation(data.stateTruth, options.snrDb);
+      relative || absolute || std::isinf(options.snrDb) ? 0.0 : noiseStandardDeviation(data.stateTruth, options.snrDb);
   std::mt19937_64 random(options.seed);
   std::normal_distribution<double> noise(0.0, 1.0);
   data.y.resize(static_cast<std::size_t>(rows));
   for (std::size_t k = 0; k < data.y.size(); ++k) {
-    data.y[k] = measureModel(model, data.stateTruth[k], inputAt(model, static_cast<double>(k) * h), data.parameterTruth[k]);
+    data.y[k] =
+        measureModel(model, data.stateTruth[k], inputAt(model, static_cast<double>(k) * h), data.parameterTruth[k]);
     for (int c = 0; c < Model::MeasDim; ++c)
-      data.y[k](c) += (relative ? options.relativeNoise * std::abs(data.y[k](c)) : sigma) * noise(random);
+      data.y[k](c) += (absolute   ? double((*options.absoluteNoise)(c))
+                       : relative ? options.relativeNoise * std::abs(data.y[k](c))
+                                  : sigma) *
+                      noise(random);
   }
   return data;
 }
