@@ -54,6 +54,7 @@ class ParameterSensitivity {
     priorInformation_ = information_.diagonal();
     openLoopTime_ = sinceCorrection_ = Scalar(0);
     corrections_ = 0;
+    largestShare_ = Scalar(0);
     candidateState_ = state_;
     stale_ = false;
   }
@@ -125,10 +126,10 @@ class ParameterSensitivity {
 
   /// Measurement update about the prior (x̂⁻, θ̂), with g the model's measurement: ψ by forward
   /// differences of g along (W⁻ᵣ, eᵣ), zero on missing components; W ← W⁻ − K ψ; the information
-  /// I ← λ I + (1 − λ) I₀ + w ψᵀ P_yy⁻¹ ψ (the prior I₀ is never forgotten) with the forgetting
+  /// I ← λ I + (1 − λ) I₀ + ψᵀ P_yy⁻¹ ψ (the prior I₀ is never forgotten) with the forgetting
   /// λ = max(exp(−Δt / memory), exp(−1 / minimumUpdates)), Δt the time since the last correction (a
   /// memory of `memory` time units, and of at least `minimumUpdates` updates however long the
-  /// interval), and the weight w of `weight()`.
+  /// interval); and the weight w of this update's step (`weight()`).
   /// `innovationFactor` is the lower Cholesky factor S of P_yy and `whitenedCross` is U = P_xy S⁻ᵀ, so
   /// that K ψ = U (S⁻¹ ψ) (detail/unscented_engine.hpp). Returns false (candidates unspecified) when a
   /// result is not finite.
@@ -168,13 +169,22 @@ class ParameterSensitivity {
     }
     weight_ = std::min(Scalar(1), Scalar(corrections_ + 1) / (kEasing * memoryUpdates_));
     if (!(weight_ > Scalar(0))) weight_ = Scalar(1);  // an infinite memory: no easing
+    // The share of P_yy that is the sensor's noise, tr(R P_yy⁻¹) / m = |S⁻¹ √R|²_F / m: small while the
+    // state estimate is uncertain, at its steady level once it has settled. Against the largest share
+    // seen so far, it eases the steps in for as long as the state takes to settle, in any time unit.
+    noiseShare_ = MeasMatrix(noiseWeights_.cwiseInverse().asDiagonal());
+    detail::solveLowerInPlace(innovationFactor, noiseShare_);
+    share_ = noiseShare_.squaredNorm() / Scalar(M);
+    candidateLargestShare_ = std::max(largestShare_, share_);
+    if (candidateLargestShare_ > Scalar(0) && std::isfinite(share_))
+      weight_ = std::min(weight_, share_ / candidateLargestShare_);
     // The memory forgets the data, never the prior: I = I₀ + Σ λ^(k−j) wⱼ Jⱼ. Forgetting I₀ too would let
     // the information about a direction the data do not excite decay to zero, and the gain I⁻¹ ψᵀ P_yy⁻¹
     // grow without bound in it (the wind-up of recursive least squares with forgetting), the solve with
     // I amplifying rounding on its way there.
     candidateInformation_ = forgetting_ * information_;
     candidateInformation_.diagonal() += (Scalar(1) - forgetting_) * priorInformation_;
-    candidateInformation_.noalias() += weight_ * (whitened_.transpose() * whitened_);
+    candidateInformation_.noalias() += whitened_.transpose() * whitened_;
     return detail::allFinite(candidateMeasurement_) && detail::allFinite(candidateState_) &&
            detail::allFinite(candidateInformation_);
   }
@@ -184,6 +194,7 @@ class ParameterSensitivity {
     state_ = candidateState_;
     if (!stale_) measurement_ = candidateMeasurement_;
     information_ = candidateInformation_;
+    largestShare_ = candidateLargestShare_;
     ++corrections_;
     sinceCorrection_ = Scalar(0);
     if (!stale_) openLoopTime_ = Scalar(0);
@@ -223,11 +234,12 @@ class ParameterSensitivity {
     }
   }
 
-  /// The weight w of the measurement update in progress: (k + 1) / (memory in updates / 10) for the k-th
-  /// update since the start, at most 1. While the state estimate settles from its first guess the
-  /// innovations are mostly its error, not the parameters'; easing the adaptation in over a tenth of
-  /// the memory keeps that error from moving θ̂ early and from staying in the information for the whole
-  /// memory (docs/tuning-mjukf.md).
+  /// The weight w of the step of the measurement update in progress: (k + 1) / (memory in updates / 10)
+  /// for the k-th update since the start, at most 1. While the state estimate settles from its first
+  /// guess the innovations are mostly its error, not the parameters'; easing the steps in over a tenth
+  /// of the memory keeps that error from moving θ̂ early (docs/tuning-mjukf.md). The information is not
+  /// weighed: it only says how much is known, and a weight on it would cancel in the step once the data
+  /// outweigh the prior.
   Scalar weight() const { return weight_; }
 
   /// W = ∂x̂/∂θ̂ of the last committed update.
@@ -258,6 +270,8 @@ class ParameterSensitivity {
   Scalar memoryUpdates_ = std::numeric_limits<Scalar>::infinity();
   static constexpr Scalar kEasing = Scalar(0.1);  // the adaptation is eased in over this share of the memory
   Scalar weight_ = 1;                             // w of the update in progress
+  Scalar share_ = 0, largestShare_ = 0, candidateLargestShare_ = 0;  // tr(R P_yy⁻¹) / m, and its largest
+  MeasMatrix noiseShare_ = MeasMatrix::Zero();                        // S⁻¹ √R
   long corrections_ = 0;                          // measurement updates since the start
   // Workspace, zeroed once so that copying an object (a filter is built from a copy of its policy)
   // copies no indeterminate values.
