@@ -58,8 +58,7 @@ Outcome runOnce(unsigned seed, int steps) {
   const AngleOnlyMotor::Param guess(0.5, -0.2);
   // The truth is drawn from the filter's prior, so that "P_θ means what it says" is a statement about
   // these runs and not about one lucky truth.
-  const AngleOnlyMotor::Param theta =
-      guess + AngleOnlyMotor::Param(0.5 * normal(random), 0.5 * normal(random));
+  const AngleOnlyMotor::Param theta = guess + AngleOnlyMotor::Param(0.5 * normal(random), 0.5 * normal(random));
   AngleOnlyMotor::State x(0.01 * normal(random), 0.1 * normal(random));
   Filter filter(AngleOnlyMotor(), AngleOnlyMotor::State::Zero(), guess, s);
   const AngleOnlyMotor model;

@@ -401,10 +401,9 @@ TEST(DualUkf, PropagationCountsOfBothOrderings) {
 // parameterObservationNoise, by explicit inverse.
 template <class Model, class Stepper, class InputAt>
 void parameterStep(const Model& model, const mjukf::DualUkfSettingsFor<Model>& s, const typename Model::State& x,
-                   const Eigen::Matrix<double, Model::StateDim, Model::ParamDim>& W,
-                   const typename Model::Param& theta, Eigen::Matrix<double, Model::ParamDim, Model::ParamDim>& P,
-                   typename Model::Param& thetaOut, InputAt&& inputAt, double t, double h, int steps,
-                   const typename Model::Meas& y,
+                   const Eigen::Matrix<double, Model::StateDim, Model::ParamDim>& W, const typename Model::Param& theta,
+                   Eigen::Matrix<double, Model::ParamDim, Model::ParamDim>& P, typename Model::Param& thetaOut,
+                   InputAt&& inputAt, double t, double h, int steps, const typename Model::Meas& y,
                    const Eigen::Matrix<double, Model::MeasDim, Model::MeasDim>& stateInnovation) {
   constexpr int p = Model::ParamDim, m = Model::MeasDim;
   using PointSet = mjukf::MerweScaledSigmaPoints<double, p>;
@@ -491,8 +490,8 @@ TEST(DualUkf, EachStepIsTheTextbookDualStepInBothOrderings) {
 
         Model::Param thetaNext;
         parameterStep<Model, mjukf::Rk4<double>>(
-            model, s, x, W, theta, Ptheta, thetaNext, [&](double time) { return held ? u : model.input(time); }, t,
-            h, steps, y, prior.lastUpdate().innovationCovariance);
+            model, s, x, W, theta, Ptheta, thetaNext, [&](double time) { return held ? u : model.input(time); }, t, h,
+            steps, y, prior.lastUpdate().innovationCovariance);
         ASSERT_LT((dual.parameters() - thetaNext).cwiseAbs().maxCoeff(), 1e-12) << "step " << k;
         ASSERT_LT((dual.parameterCovariance() - Ptheta).cwiseAbs().maxCoeff(), 1e-12) << "step " << k;
 

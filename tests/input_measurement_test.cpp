@@ -30,9 +30,7 @@ struct Circuit {
     const double decay = std::exp(-dt / 20.0);
     return State(x(0) - dt * u(0) / 3600.0, decay * x(1) + (1 - decay) * 0.015 * u(0));
   }
-  static double terminal(const State& x, double current, double r0) {
-    return 3.4 + 0.7 * x(0) - x(1) - r0 * current;
-  }
+  static double terminal(const State& x, double current, double r0) { return 3.4 + 0.7 * x(0) - x(1) - r0 * current; }
 };
 
 // y = g(x, u, θ), the input given by the caller.
@@ -94,8 +92,8 @@ struct Kind {
 
 template <class K>
 class InputMeasurement : public ::testing::Test {};
-using Kinds = ::testing::Types<Kind<mjukf::Ukf>, Kind<mjukf::JointUkf>, Kind<mjukf::ModifiedJointUkf>,
-                               Kind<mjukf::DualUkf>>;
+using Kinds =
+    ::testing::Types<Kind<mjukf::Ukf>, Kind<mjukf::JointUkf>, Kind<mjukf::ModifiedJointUkf>, Kind<mjukf::DualUkf>>;
 TYPED_TEST_SUITE(InputMeasurement, Kinds);
 
 constexpr double kStep = 1.0;  // a battery sampled every second
@@ -180,7 +178,8 @@ TYPED_TEST(InputMeasurement, NonFiniteInputIsRefusedAndChangesNothing) {
     EXPECT_EQ(filter.measurementUpdate(Circuit::Meas(3.9), Circuit::Input(bad)), mjukf::Status::NonFiniteInput);
     mjukf::MeasurementMask<1> present;
     present(0) = true;
-    EXPECT_EQ(filter.measurementUpdate(Circuit::Meas(3.9), Circuit::Input(bad), present), mjukf::Status::NonFiniteInput);
+    EXPECT_EQ(filter.measurementUpdate(Circuit::Meas(3.9), Circuit::Input(bad), present),
+              mjukf::Status::NonFiniteInput);
     EXPECT_TRUE(sameBits(filter.state(), before.state()));
     EXPECT_TRUE(sameBits(filter.covariance(), before.covariance()));
     EXPECT_TRUE(sameBits(filter.parameters(), before.parameters()));

@@ -51,7 +51,8 @@ Filter::Param run(Filter& filter, double seconds) {
   OppositeLags::State x = OppositeLags::State::Zero();
   const int steps = int(std::lround(seconds / kStep));
   for (int k = 0; k < steps; ++k) {
-    x = mjukf::stepModel(plant, rk4, k * kStep, kStep, x, [&](double t) { return plant.input(t); }, kTruth);
+    x = mjukf::stepModel(
+        plant, rk4, k * kStep, kStep, x, [&](double t) { return plant.input(t); }, kTruth);
     EXPECT_TRUE(mjukf::taken(filter.timeUpdate(k * kStep, kStep)));
     EXPECT_TRUE(mjukf::taken(filter.measurementUpdate(plant.measurement(x, kTruth))));
   }

@@ -168,8 +168,7 @@ TEST(SettingsValidation, ModifiedJointSignedTransformationAndPerParameterScaling
   s.transformation(0, 0) = 0.6;
   s.transformation(0, 1) = -0.4;
   s.scaling << -0.002, 0.003;
-  EXPECT_FALSE(
-      mjukf::ModifiedJointUkf<Robot::Model>::validate(Robot::initialState(), Robot::initialParameters(), s));
+  EXPECT_FALSE(mjukf::ModifiedJointUkf<Robot::Model>::validate(Robot::initialState(), Robot::initialParameters(), s));
   expectModifiedRejected([](auto& s) { s.parameterSpread(1) = std::numeric_limits<double>::infinity(); },
                          "parameterSpread");
 }

@@ -254,8 +254,8 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
   // ∂z/∂θ (rows × p) by the statistical linear regression of the images zⱼ of the θⱼ of (center, S Sᵀ):
   // Σ Wcⱼ (zⱼ − z̄)(θⱼ − center)ᵀ P⁻¹, exact for z linear in θ.
   template <class Images, class Out>
-  void regressOnParameters(const Images& images, const typename ParameterEstimate::Points& thetas,
-                           const Param& center, const typename ParameterEstimate::Matrix& lowerFactor, Out& out) {
+  void regressOnParameters(const Images& images, const typename ParameterEstimate::Points& thetas, const Param& center,
+                           const typename ParameterEstimate::Matrix& lowerFactor, Out& out) {
     const auto& set = estimate_.sigmaPoints();
     Eigen::Matrix<Scalar, Out::RowsAtCompileTime, 1> mean;
     weightedMean(images, set.meanWeights(), mean);
@@ -283,11 +283,12 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
     if (drawn)
       if (const Status st = pe.draw(pe.mean(), pe.factor()); st != Status::Ok) return st;
     const auto& thetas = drawn ? pe.workPoints() : pe.points();
-    const Param& center = pe.mean();  // θ̂⁻ after a time update: the θⱼ were drawn about it
+    const Param& center = pe.mean();          // θ̂⁻ after a time update: the θⱼ were drawn about it
     for (int j = 0; j < ParameterCount; ++j)  // Dⱼ = g(Φ_h(x̂_{k−1} + W (θⱼ − θ̂); θⱼ), u, θⱼ)
       pe.measuredPoints().col(j) = measureModel(
-          model, drawn ? State(engine.state() + sensitivity_ * (thetas.col(j) - center)) : State(propagatedStates_.col(j)),
-          u, thetas.col(j));
+          model,
+          drawn ? State(engine.state() + sensitivity_ * (thetas.col(j) - center)) : State(propagatedStates_.col(j)), u,
+          thetas.col(j));
     if (!allFinite(pe.measuredPoints())) return Status::NonFiniteResult;
     regressOnParameters(pe.measuredPoints(), thetas, center, pe.factor(), measurementSensitivity_);  // ψ = ∂ŷ/∂θ̂
     if (const Status st =
@@ -326,9 +327,7 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
     return settled;
   }
   // x̂_{k−1} given the corrected θ̂_k: moved by W (θ̂_k − θ̂_{k−1}).
-  State shiftedPriorMean() const {
-    return priorMean_ + sensitivity_ * (estimate_.candidateMean() - estimate_.mean());
-  }
+  State shiftedPriorMean() const { return priorMean_ + sensitivity_ * (estimate_.candidateMean() - estimate_.mean()); }
   template <class Engine>
   Status predictAgainHeld(Engine& engine) {
     const HeldInput<Model> input{step_.held};
@@ -357,15 +356,15 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
     return Status::Ok;
   }
 
-  ParameterEstimate estimate_;                                                // θ̂, P^θ, the θⱼ
+  ParameterEstimate estimate_;  // θ̂, P^θ, the θⱼ
   Eigen::Matrix<Scalar, MeasDim, MeasDim> observationNoise_ = decltype(observationNoise_)::Zero();  // of this step
   bool boundsActive_;
   bool storesStep_;  // the UpdatedParameters ordering
   MeasurementGate<Scalar, MeasDim> noGate_;
   PropagatedStates propagatedStates_ = PropagatedStates::Zero();  // Φ_h(x̂_{k−1} + W Δθⱼ; θⱼ), last time update
-  Sensitivity sensitivity_ = Sensitivity::Zero();           // W = ∂x̂/∂θ̂ after the last correction
-  Sensitivity predictedSensitivity_ = Sensitivity::Zero();  // W⁻ of the last time update
-  Scalar openLoopTime_ = 0;                                 // open-loop propagation since the last time update
+  Sensitivity sensitivity_ = Sensitivity::Zero();                 // W = ∂x̂/∂θ̂ after the last correction
+  Sensitivity predictedSensitivity_ = Sensitivity::Zero();        // W⁻ of the last time update
+  Scalar openLoopTime_ = 0;                                       // open-loop propagation since the last time update
   // The UpdatedParameters ordering: the state filter's prior of the last time update and its step.
   State priorMean_ = State::Zero();
   StateMatrix priorFactor_ = StateMatrix::Zero();

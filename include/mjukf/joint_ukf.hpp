@@ -64,8 +64,8 @@ class AugmentedParameters : public ParameterPolicy<Model, Integrator, Settings, 
   // Yᵢ = g(xᵢ, u, θᵢ) of zᵢ = [xᵢ; θᵢ]
   void measurePoints(const Model& model, const typename Base::Input& u, const Points& points, MeasPoints& measured) {
     for (int i = 0; i < Base::Count; ++i)
-      measured.col(i) = measureModel(model, points.col(i).template head<StateDim>(), u,
-                                     points.col(i).template tail<ParamDim>());
+      measured.col(i) =
+          measureModel(model, points.col(i).template head<StateDim>(), u, points.col(i).template tail<ParamDim>());
   }
   template <class Engine>
   Status update(Engine& engine, const typename Base::Meas& y, const typename Base::Input& u,

@@ -116,9 +116,9 @@ template <class Result, class Scalar, int Rows, class = void>
 struct ReturnsVector : std::false_type {};
 template <class Result, class Scalar, int Rows>
 struct ReturnsVector<Result, Scalar, Rows, std::void_t<typename std::decay_t<Result>::Scalar>>
-    : std::bool_constant<std::is_same_v<typename std::decay_t<Result>::Scalar, Scalar> &&
-                         int(std::decay_t<Result>::RowsAtCompileTime) == Rows &&
-                         int(std::decay_t<Result>::ColsAtCompileTime) == 1> {};
+    : std::bool_constant<std::is_same_v<typename std::decay_t<Result>::Scalar, Scalar>&& int(
+                             std::decay_t<Result>::RowsAtCompileTime) ==
+                         Rows&& int(std::decay_t<Result>::ColsAtCompileTime) == 1> {};
 
 // The return type of a detected function, or void when it is absent (checked only where present).
 template <class Has, class = void>
@@ -223,8 +223,8 @@ constexpr bool checkModel() {
 /// y = g(x, u, θ) or g(x, θ), whichever the model gives: the one place the filters, `simulate` and the
 /// programs evaluate a measurement. `u` is ignored when the measurement does not depend on the input.
 template <class Model>
-typename Model::Meas measureModel(const Model& model, const typename Model::State& x,
-                                  const typename Model::Input& u, const typename Model::Param& theta) {
+typename Model::Meas measureModel(const Model& model, const typename Model::State& x, const typename Model::Input& u,
+                                  const typename Model::Param& theta) {
   if constexpr (measurementTakesInput<Model>) {
     return model.measurement(x, u, theta);
   } else {

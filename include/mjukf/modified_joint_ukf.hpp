@@ -199,7 +199,9 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
     if (automatic_) {
       const Scalar memory = s.adaptiveScaling ? s.convergenceTime : std::numeric_limits<Scalar>::infinity();
       const Scalar updates = s.adaptiveScaling ? s.minimumMemoryUpdates : std::numeric_limits<Scalar>::infinity();
-      const auto measure = [&c](const State& x, const Param& theta) { return measureModel(c.model, x, c.input, theta); };
+      const auto measure = [&c](const State& x, const Param& theta) {
+        return measureModel(c.model, x, c.input, theta);
+      };
       if (!sensitivity_.correct(c.priorMean, parameters_, measure, c.gainFactor, c.innovationFactor, memory, updates,
                                 c.present))
         return Status::NonFiniteResult;
@@ -297,10 +299,10 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
 ///     θᵢ ← θ̂ − ξ T (y − Yᵢ),   θ̂ ← (1 / (2n + 1)) Σ θᵢ
 ///
 /// with Yᵢ = g(χᵢ⁺, θᵢ), θ̂ the estimate before this update and one ξ per parameter (diag(ξ) T). A masked
-/// update reduces T to the columns present, each row rescaled to Σⱼ |tᵣⱼ| = 1 again (eq. 14); a row with no weight on any present
-/// component leaves its parameter at θ̂. The settings `automaticTransformation` and `adaptiveScaling`
-/// set T and one ξ per parameter from the sensitivities instead, for p more propagations per time
-/// update (parameter_sensitivity.hpp, docs/tuning-mjukf.md).
+/// update reduces T to the columns present, each row rescaled to Σⱼ |tᵣⱼ| = 1 again (eq. 14); a row with no weight on
+/// any present component leaves its parameter at θ̂. The settings `automaticTransformation` and `adaptiveScaling` set T
+/// and one ξ per parameter from the sensitivities instead, for p more propagations per time update
+/// (parameter_sensitivity.hpp, docs/tuning-mjukf.md).
 ///
 /// Template arguments: docs/design.md, "Template arguments of every filter"; the sigma-point set must
 /// have 2n + 1 points. Eqs. 9–10 touch no covariance, so they are the same in both covariance forms.
@@ -348,7 +350,8 @@ class ModifiedJointUkf
       return e;
     if (settings.adaptiveScaling && !(std::isfinite(settings.convergenceTime) && settings.convergenceTime > 0))
       return detail::invalid(kOwner, "convergenceTime", "must be finite and > 0 (seconds)");
-    if (settings.adaptiveScaling && !(std::isfinite(settings.minimumMemoryUpdates) && settings.minimumMemoryUpdates >= 1))
+    if (settings.adaptiveScaling &&
+        !(std::isfinite(settings.minimumMemoryUpdates) && settings.minimumMemoryUpdates >= 1))
       return detail::invalid(kOwner, "minimumMemoryUpdates", "must be finite and >= 1 (measurement updates)");
     if (settings.sensitivityInterval < 0) return detail::invalid(kOwner, "sensitivityInterval", "must be >= 0");
     // Each row of T has Σⱼ |tᵣⱼ| = 1 (paper eq. 14, with signed entries): T only distributes the error

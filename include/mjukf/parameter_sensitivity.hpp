@@ -156,16 +156,16 @@ class ParameterSensitivity {
       for (int j = 0; j < M; ++j)
         if (!(*present)(j)) candidateMeasurement_.row(j).setZero();
     whitened_ = candidateMeasurement_;
-    detail::solveLowerInPlace(innovationFactor, whitened_);                        // S⁻¹ ψ
-    if (!stale_) candidateState_.noalias() -= whitenedCross * whitened_;           // W − K ψ = W − U S⁻¹ ψ
+    detail::solveLowerInPlace(innovationFactor, whitened_);               // S⁻¹ ψ
+    if (!stale_) candidateState_.noalias() -= whitenedCross * whitened_;  // W − K ψ = W − U S⁻¹ ψ
     if (sinceCorrection_ != forgettingInterval_ || memory != forgettingMemory_ ||
         minimumUpdates != forgettingUpdates_) {  // exp once per schedule
       forgettingInterval_ = sinceCorrection_;
       forgettingMemory_ = memory;
       forgettingUpdates_ = minimumUpdates;
       forgetting_ = std::max(std::exp(-sinceCorrection_ / memory), std::exp(Scalar(-1) / minimumUpdates));
-      memoryUpdates_ = forgetting_ < Scalar(1) ? Scalar(-1) / std::log(forgetting_)
-                                               : std::numeric_limits<Scalar>::infinity();
+      memoryUpdates_ =
+          forgetting_ < Scalar(1) ? Scalar(-1) / std::log(forgetting_) : std::numeric_limits<Scalar>::infinity();
     }
     weight_ = std::min(Scalar(1), Scalar(corrections_ + 1) / (kEasing * memoryUpdates_));
     if (!(weight_ > Scalar(0))) weight_ = Scalar(1);  // an infinite memory: no easing
@@ -264,15 +264,15 @@ class ParameterSensitivity {
   Scalar candidateInterval_ = 0;
   bool stale_ = false;  // the last time update did not refresh W: reuse ψ
   bool candidateStale_ = false;
-  Meas noiseWeights_ = Meas::Ones();                                         // 1 / √Rⱼⱼ
+  Meas noiseWeights_ = Meas::Ones();  // 1 / √Rⱼⱼ
   // λ of the last interval, and the memory in updates it makes, −1 / ln λ.
   Scalar forgettingInterval_ = -1, forgettingMemory_ = -1, forgettingUpdates_ = -1, forgetting_ = 1;
   Scalar memoryUpdates_ = std::numeric_limits<Scalar>::infinity();
   static constexpr Scalar kEasing = Scalar(0.1);  // the adaptation is eased in over this share of the memory
   Scalar weight_ = 1;                             // w of the update in progress
   Scalar share_ = 0, largestShare_ = 0, candidateLargestShare_ = 0;  // tr(R P_yy⁻¹) / m, and its largest
-  MeasMatrix noiseShare_ = MeasMatrix::Zero();                        // S⁻¹ √R
-  long corrections_ = 0;                          // measurement updates since the start
+  MeasMatrix noiseShare_ = MeasMatrix::Zero();                       // S⁻¹ √R
+  long corrections_ = 0;                                             // measurement updates since the start
   // Workspace, zeroed once so that copying an object (a filter is built from a copy of its policy)
   // copies no indeterminate values.
   MeasSensitivity whitened_ = MeasSensitivity::Zero();

@@ -37,8 +37,7 @@ void runAll(const char* name, const std::string& file) {
   auto automatic = Experiment::modifiedJointUkf();
   automatic.automaticTransformation = true;
   automatic.adaptiveScaling = true;
-  mjukf::ModifiedJointUkf<Model> mjukf(Model(), Experiment::initialState(), Experiment::initialParameters(),
-                                       automatic);
+  mjukf::ModifiedJointUkf<Model> mjukf(Model(), Experiment::initialState(), Experiment::initialParameters(), automatic);
   run((std::string(name) + " mjukf-auto").c_str(), mjukf, y, h, every);
   mjukf::DualUkf<Model> dual(Model(), Experiment::initialState(), Experiment::initialParameters(),
                              Experiment::dualUkf());

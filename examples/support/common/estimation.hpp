@@ -6,9 +6,9 @@
 
 #include <chrono>
 #include <optional>
-#include <type_traits>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "common/experiment.hpp"

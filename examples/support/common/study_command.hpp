@@ -360,8 +360,7 @@ int studyCommand(const std::vector<std::string>& words) {
             result.finalEstimate[std::size_t(i)] = run.parameters.empty() ? std::nan("") : run.parameters.back()(i);
           }
           result.diverged = detail::divergedRun(run, data, setup.initialParameters);
-          if (run.finalParameterCovariance && !run.parameters.empty() &&
-              run.outcome.status == Status::Ok) {
+          if (run.finalParameterCovariance && !run.parameters.empty() && run.outcome.status == Status::Ok) {
             const typename Model::Param error = run.parameters.back() - data.parameterTruth.back();
             const auto factor = run.finalParameterCovariance->llt();
             if (factor.info() == Eigen::Success) result.nees = error.dot(factor.solve(error));
@@ -448,11 +447,11 @@ int studyCommand(const std::vector<std::string>& words) {
         if (std::isfinite(v)) nees.push_back(v);
       }
       const double dof = double(nees.size()) * p;
-      const std::string consistency =
-          nees.empty() ? std::string("  -")
-                       : format("  %.3g [%.3g, %.3g]", detail::mean(nees),
-                                detail::chiSquareQuantile(dof, -1.959964) / double(nees.size()),
-                                detail::chiSquareQuantile(dof, 1.959964) / double(nees.size()));
+      const std::string consistency = nees.empty()
+                                          ? std::string("  -")
+                                          : format("  %.3g [%.3g, %.3g]", detail::mean(nees),
+                                                   detail::chiSquareQuantile(dof, -1.959964) / double(nees.size()),
+                                                   detail::chiSquareQuantile(dof, 1.959964) / double(nees.size()));
       say(line + format(" %ld/%zu", diverged, seeds.size()) + consistency);
       shown.push_back(diverged < long(seeds.size()));
     }

@@ -755,8 +755,9 @@ constexpr bool checkParameterPolicy() {
                 "parameter policy: missing member propagatePoints(const Step&, Points&)");
   static_assert(PolicyHas_propagateMean<Policy>::value,
                 "parameter policy: missing member propagateMean(const Step&, const Vector&) -> Vector");
-  static_assert(PolicyHas_measurePoints<Policy>::value,
-                "parameter policy: missing member measurePoints(const Model&, const Input&, const Points&, MeasPoints&)");
+  static_assert(
+      PolicyHas_measurePoints<Policy>::value,
+      "parameter policy: missing member measurePoints(const Model&, const Input&, const Points&, MeasPoints&)");
   static_assert(PolicyHas_correctParameters<Policy>::value,
                 "parameter policy: missing member correctParameters(const Correction&) -> Status");
   static_assert(PolicyHas_constrainMean<Policy>::value, "parameter policy: missing member constrainMean(Vector&)");
@@ -1067,8 +1068,8 @@ class UnscentedEngine {
     const bool drawPoints = settings_.redrawPointsForUpdate || !estimate_.hasPoints();
     if (drawPoints)
       if (const Status s = estimate_.draw(estimate_.mean(), estimate_.factor()); s != Status::Ok) return s;
-    return correctAndCommit(drawPoints ? estimate_.workPoints() : estimate_.points(), estimate_.prior(drawPoints), y,
-                            u, present);
+    return correctAndCommit(drawPoints ? estimate_.workPoints() : estimate_.points(), estimate_.prior(drawPoints), y, u,
+                            present);
   }
 
   // §3 from `points` about a prior, then the policy's parameter correction, then the checks and the
