@@ -56,6 +56,11 @@ struct ParameterChange {
   double scaling;
 };
 
+/// Q_θ (times I) of the dual UKF where the parameters change (`paper`'s and `study`'s change runs): JUKF's
+/// random walk of the paper's robot, which lets it follow the change. The presets assume constant
+/// parameters, Q_θ = 0.
+constexpr double kChangeParameterProcessNoise = 1e-5;
+
 namespace detail {
 template <class Plant, class = void>
 struct HasPaperTable : std::false_type {};

@@ -47,10 +47,6 @@ namespace mjukf::examples {
 /// typo such as 1-10000000000 should be refused, not attempted.
 constexpr std::size_t kMaxStudyRuns = 1'000'000;
 
-/// Q_θ of the dual UKF in a parameter-change scenario: JUKF's random walk of the paper's robot, which
-/// lets it follow the change (the presets assume constant parameters, Q_θ = 0).
-constexpr double kChangeParameterProcessNoise = 1e-5;
-
 /// A run diverged when a final parameter error exceeds this multiple of its scale (see divergedRun()).
 constexpr double kDivergenceBound = 1.0;
 
