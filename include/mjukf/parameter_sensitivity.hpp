@@ -234,12 +234,12 @@ class ParameterSensitivity {
     }
   }
 
-  /// The weight w of the step of the measurement update in progress: (k + 1) / (memory in updates / 10)
-  /// for the k-th update since the start, at most 1. While the state estimate settles from its first
-  /// guess the innovations are mostly its error, not the parameters'; easing the steps in over a tenth
-  /// of the memory keeps that error from moving θ̂ early (docs/tuning-mjukf.md). The information is not
-  /// weighed: it only says how much is known, and a weight on it would cancel in the step once the data
-  /// outweigh the prior.
+  /// The weight w of the step of the measurement update in progress: the smaller of
+  /// (k + 1) / (memory in updates / 50) for the k-th update since the start and the share of P_yy that is
+  /// sensor noise against the largest share seen, at most 1. While the state estimate settles from its
+  /// first guess the innovations are mostly its error, not the parameters'; easing the steps in keeps
+  /// that error from moving θ̂ early (docs/tuning-mjukf.md). The information is not weighed: it only says
+  /// how much is known, and a weight on it would cancel in the step once the data outweigh the prior.
   Scalar weight() const { return weight_; }
 
   /// W = ∂x̂/∂θ̂ of the last committed update.
@@ -268,7 +268,7 @@ class ParameterSensitivity {
   // λ of the last interval, and the memory in updates it makes, −1 / ln λ.
   Scalar forgettingInterval_ = -1, forgettingMemory_ = -1, forgettingUpdates_ = -1, forgetting_ = 1;
   Scalar memoryUpdates_ = std::numeric_limits<Scalar>::infinity();
-  static constexpr Scalar kEasing = Scalar(0.1);  // the adaptation is eased in over this share of the memory
+  static constexpr Scalar kEasing = Scalar(0.02);  // the adaptation is eased in over this share of the memory
   Scalar weight_ = 1;                             // w of the update in progress
   Scalar share_ = 0, largestShare_ = 0, candidateLargestShare_ = 0;  // tr(R P_yy⁻¹) / m, and its largest
   MeasMatrix noiseShare_ = MeasMatrix::Zero();                       // S⁻¹ √R
