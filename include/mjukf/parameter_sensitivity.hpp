@@ -269,7 +269,7 @@ class ParameterSensitivity {
   Scalar forgettingInterval_ = -1, forgettingMemory_ = -1, forgettingUpdates_ = -1, forgetting_ = 1;
   Scalar memoryUpdates_ = std::numeric_limits<Scalar>::infinity();
   static constexpr Scalar kEasing = Scalar(0.02);  // the adaptation is eased in over this share of the memory
-  Scalar weight_ = 1;                             // w of the update in progress
+  Scalar weight_ = 1;                              // w of the update in progress
   Scalar share_ = 0, largestShare_ = 0, candidateLargestShare_ = 0;  // tr(R P_yy⁻¹) / m, and its largest
   MeasMatrix noiseShare_ = MeasMatrix::Zero();                       // S⁻¹ √R
   long corrections_ = 0;                                             // measurement updates since the start
