@@ -174,11 +174,11 @@ class ParameterSensitivity {
     // seen so far, it eases the steps in for as long as the state takes to settle, in any time unit.
     noiseShare_ = MeasMatrix(noiseWeights_.cwiseInverse().asDiagonal());
     detail::solveLowerInPlace(innovationFactor, noiseShare_);
-    share_ = noiseShare_.squaredNorm() / Scalar(M);
-    candidateLargestShare_ = std::max(largestShare_, share_);
-    if (candidateLargestShare_ > Scalar(0) && std::isfinite(share_))
-      weight_ = std::min(weight_, share_ / candidateLargestShare_);
-    // The memory forgets the data, never the prior: I = I₀ + Σ λ^(k−j) wⱼ Jⱼ. Forgetting I₀ too would let
+    const Scalar share = noiseShare_.squaredNorm() / Scalar(M);
+    candidateLargestShare_ = std::max(largestShare_, share);
+    if (candidateLargestShare_ > Scalar(0) && std::isfinite(share))
+      weight_ = std::min(weight_, share / candidateLargestShare_);
+    // The memory forgets the data, never the prior: I = I₀ + Σ λ^(k−j) Jⱼ. Forgetting I₀ too would let
     // the information about a direction the data do not excite decay to zero, and the gain I⁻¹ ψᵀ P_yy⁻¹
     // grow without bound in it (the wind-up of recursive least squares with forgetting), the solve with
     // I amplifying rounding on its way there.
@@ -268,11 +268,11 @@ class ParameterSensitivity {
   // λ of the last interval, and the memory in updates it makes, −1 / ln λ.
   Scalar forgettingInterval_ = -1, forgettingMemory_ = -1, forgettingUpdates_ = -1, forgetting_ = 1;
   Scalar memoryUpdates_ = std::numeric_limits<Scalar>::infinity();
-  static constexpr Scalar kEasing = Scalar(0.02);  // the adaptation is eased in over this share of the memory
-  Scalar weight_ = 1;                              // w of the update in progress
-  Scalar share_ = 0, largestShare_ = 0, candidateLargestShare_ = 0;  // tr(R P_yy⁻¹) / m, and its largest
-  MeasMatrix noiseShare_ = MeasMatrix::Zero();                       // S⁻¹ √R
-  long corrections_ = 0;                                             // measurement updates since the start
+  static constexpr Scalar kEasing = Scalar(0.02);        // the adaptation is eased in over this share of the memory
+  Scalar weight_ = 1;                                    // w of the update in progress
+  Scalar largestShare_ = 0, candidateLargestShare_ = 0;  // the largest tr(R P_yy⁻¹) / m seen
+  MeasMatrix noiseShare_ = MeasMatrix::Zero();           // S⁻¹ √R
+  long corrections_ = 0;                                 // measurement updates since the start
   // Workspace, zeroed once so that copying an object (a filter is built from a copy of its policy)
   // copies no indeterminate values.
   MeasSensitivity whitened_ = MeasSensitivity::Zero();

@@ -1056,10 +1056,11 @@ class UnscentedEngine {
   }
 
   // The measurement update: the policy says in which order its parts run (every filter but the dual
-  // one calls correctState).
+  // one calls correctState). The input reaches g, and is checked, only when the measurement takes it.
   Status updateWithInput(const Meas& y, const Input& u, const Mask* present) {
     if (!presentComponentsFinite(y, present)) return Status::NonFiniteMeasurement;
-    if (!allFinite(u)) return Status::NonFiniteInput;
+    if constexpr (measurementTakesInput<Model>)
+      if (!allFinite(u)) return Status::NonFiniteInput;
     return policy_.update(static_cast<Filter&>(*this), y, u, present);
   }
 
