@@ -499,6 +499,20 @@ class DualUkf : public detail::EngineOf<
     this->policy_.reset(parameters, parameterCovariance);  // checked above
     return ResetResult();
   }
+  /// Starts a new pass over the same record (docs/offline-passes.md): time() back to `startTime`, the
+  /// record's t₀, and the state filter to (state, covariance), carrying the parameter filter (θ̂, P^θ)
+  /// as the last pass left it; the new state does not depend on θ̂ (W = 0). That is what
+  /// `reset(state, covariance)` does, with the time: the arguments are checked as there, and a
+  /// non-finite `startTime` is refused likewise.
+  ResetResult startPass(Scalar startTime, const State& state, const StateMatrix& covariance) {
+    if (SettingsError e = Engine::checkStartTime(kOwner, startTime)) return detail::report(e);
+    if (SettingsError e = detail::requireFinite(kOwner, "state", state)) return detail::report(e);
+    if (SettingsError e = Engine::checkResetCovariance(kOwner, covariance)) return detail::report(e);
+    this->resetEstimate(state, covariance);
+    this->policy_.reset(parameters(), parameterCovariance());  // the same θ̂ and P^θ, W = 0
+    this->restartTime(startTime);
+    return ResetResult();
+  }
 
  private:
   static constexpr const char* kOwner = "mjukf::DualUkf";

@@ -127,6 +127,8 @@ class JointUkf : public detail::EngineOf<JointUkf<Model_, Integrator_, PointSet,
   using AugmentedState = Eigen::Matrix<Scalar, AugmentedDim, 1>;
   /// The covariance of [x; θ].
   using AugmentedMatrix = Eigen::Matrix<Scalar, AugmentedDim, AugmentedDim>;
+  /// An n × n matrix: the covariance of the state block.
+  using StateMatrix = Eigen::Matrix<Scalar, StateDim, StateDim>;
 
   /// Built from the model, x̂₀, θ̂₀, the settings and the stepper: throws std::invalid_argument naming
   /// the first invalid one (`validate`). Without exceptions, build it with `create`
@@ -163,6 +165,37 @@ class JointUkf : public detail::EngineOf<JointUkf<Model_, Integrator_, PointSet,
     if (SettingsError e = Engine::checkResetCovariance(kOwner, covariance)) return detail::report(e);
     this->resetEstimate(augment(state, parameters), covariance);
     return ResetResult();
+  }
+  /// Starts a new pass over the same record (docs/offline-passes.md): time() back to `startTime`, the
+  /// record's t₀, and the estimate to [state; θ̂] with the covariance
+  ///
+  ///     [ stateCovariance   0    ]
+  ///     [ 0                 P_θθ ]
+  ///
+  /// carrying θ̂ and its covariance block P_θθ as the last pass left them. The cross terms P_xθ are
+  /// zeroed: they correlate θ with the state at the end of the record, and say nothing about a state
+  /// guessed for its start (kept beside a new state and P they could also make the matrix indefinite).
+  /// The same as `reset(state, that matrix)` with the time; a non-finite `startTime` or `state`, or a
+  /// `stateCovariance` that is not symmetric positive definite, changes nothing and is reported as
+  /// reset() reports it.
+  ResetResult startPass(Scalar startTime, const State& state, const StateMatrix& stateCovariance) {
+    if (SettingsError e = Engine::checkStartTime(kOwner, startTime)) return detail::report(e);
+    if (SettingsError e = detail::requireFinite(kOwner, "state", state)) return detail::report(e);
+    if (SettingsError e = detail::requireCommittableCovariance(kOwner, "covariance", stateCovariance))
+      return detail::report(e);
+    const AugmentedMatrix covariance = passCovariance(stateCovariance);
+    if (SettingsError e = Engine::checkResetCovariance(kOwner, covariance)) return detail::report(e);
+    this->resetEstimate(augment(state, parameters()), covariance);
+    this->restartTime(startTime);
+    return ResetResult();
+  }
+  /// The covariance a new pass starts from with this state covariance: diag(stateCovariance, P_θθ) of
+  /// the current estimate (`startPass`).
+  AugmentedMatrix passCovariance(const StateMatrix& stateCovariance) const {
+    AugmentedMatrix p = AugmentedMatrix::Zero();
+    p.template topLeftCorner<StateDim, StateDim>() = stateCovariance;
+    p.template bottomRightCorner<ParamDim, ParamDim>() = covariance().template bottomRightCorner<ParamDim, ParamDim>();
+    return p;
   }
 
  private:

@@ -158,6 +158,26 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   // A new state estimate that does not depend on θ̂ (reset of the state alone): W = 0.
   void restartState() { sensitivity_.restartState(); }
 
+  // What the parameter part has learnt (the filter's ParameterKnowledge), and a new pass from it: the
+  // sensitivities' schedule restarts as at construction (a refresh at the first time update, W = 0).
+  struct Knowledge {
+    Param parameters;
+    ParamPoints parameterPoints;
+    Sensitivity sensitivity;
+    Transformation transformation;
+    Param scalings;
+  };
+  Knowledge knowledge() const { return Knowledge{parameters_, parameterPoints_, sensitivity_, transformation_, scalings_}; }
+  void startPass(const Knowledge& k) {
+    parameters_ = k.parameters;
+    parameterPoints_ = k.parameterPoints;
+    sensitivity_ = k.sensitivity;
+    sensitivity_.restartPass();
+    transformation_ = k.transformation;
+    scalings_ = k.scalings;
+    timeUpdates_ = 0;
+  }
+
   template <class Step>
   Status predictParameters(const Step&, const Est&) {
     return Status::Ok;
@@ -397,6 +417,40 @@ class ModifiedJointUkf
     if (SettingsError e = Engine::checkResetCovariance(kOwner, covariance)) return detail::report(e);
     this->resetEstimate(state, covariance);
     this->policy_.restartState();
+    return ResetResult();
+  }
+  /// Everything the filter has learnt about θ, carried from one pass over a record to the next
+  /// (`startPass`): θ̂, the θᵢ and, in the automatic modes, the sensitivities' state (the information
+  /// about θ with its prior, the easing's history) and the last T and ξ.
+  using ParameterKnowledge = typename Engine::PolicyType::Knowledge;
+  /// What the filter has learnt about θ so far (`startPass` carries it into a new pass).
+  ParameterKnowledge parameterKnowledge() const { return this->policy_.knowledge(); }
+  /// Starts a new pass over the same record (docs/offline-passes.md): time() back to `startTime`, the
+  /// record's t₀, and the state to (state, covariance), keeping θ̂, the θᵢ and the automatic modes'
+  /// information about θ as the last pass left them. The new state does not depend on θ̂ (W = 0), and
+  /// the sensitivities start again as at construction: refreshed at the first time update, no time
+  /// since a correction. Unlike `reset(state, covariance)`, which keeps the time and the sensitivities'
+  /// schedule (a recovery within one run). Arguments checked as reset() checks them, and a non-finite
+  /// `startTime` likewise.
+  ResetResult startPass(Scalar startTime, const State& state, const StateMatrix& covariance) {
+    return startPass(startTime, state, covariance, parameterKnowledge());
+  }
+  /// A new pass as above from `knowledge`, taken by `parameterKnowledge()` of this filter or of another
+  /// of the same type (a run over another record of the same plant); it comes with the prior scale and
+  /// the noise weights of the filter it was taken from. Its θ̂ and θᵢ must be finite and θ̂ within the
+  /// bounds (reported as 'parameters').
+  ResetResult startPass(Scalar startTime, const State& state, const StateMatrix& covariance,
+                        const ParameterKnowledge& knowledge) {
+    if (SettingsError e = Engine::checkStartTime(kOwner, startTime)) return detail::report(e);
+    if (SettingsError e = detail::checkInitialValues(kOwner, state, knowledge.parameters,
+                                                     this->settings_.parameterBounds, "state", "parameters"))
+      return detail::report(e);
+    if (SettingsError e = detail::requireFinite(kOwner, "parameters", knowledge.parameterPoints))
+      return detail::report(e);
+    if (SettingsError e = Engine::checkResetCovariance(kOwner, covariance)) return detail::report(e);
+    this->resetEstimate(state, covariance);
+    this->policy_.startPass(knowledge);
+    this->restartTime(startTime);
     return ResetResult();
   }
   /// Starts again from (state, covariance) and θ̂ = `parameters`, the θᵢ spread around it by eq. 8 and

@@ -64,6 +64,14 @@ class ParameterSensitivity {
     candidateState_ = state_;
     openLoopTime_ = Scalar(0);
   }
+  /// A new pass over the same record: `restartState`, and the time since the last correction and the
+  /// reuse of ψ start again as at `start` (the record's time restarts; no time passed since the last
+  /// pass's last update). The information, its prior and the easing's history are kept.
+  void restartPass() {
+    restartState();
+    sinceCorrection_ = Scalar(0);
+    stale_ = false;
+  }
 
   /// The forward-difference step δ along (Wᵣ, eᵣ) about θ, for an output of size `output` (max norm):
   /// the step that makes the output move by √ε of its size, δ = √ε ‖output‖ / ‖Wᵣ‖ (W ≈ the derivative

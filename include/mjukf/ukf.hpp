@@ -135,6 +135,17 @@ class Ukf : public detail::EngineOf<Ukf<Model_, Integrator_, PointSet, Form>, Mo
     this->policy_.reset(parameters);
     return ResetResult();
   }
+  /// Starts a new pass over the same record (docs/offline-passes.md): time() back to `startTime`, the
+  /// record's t₀, and the estimate to (state, covariance), as `reset(state, covariance)` does. The
+  /// arguments are checked as there, and a non-finite `startTime` is refused likewise.
+  ResetResult startPass(Scalar startTime, const State& state, const StateMatrix& covariance) {
+    if (SettingsError e = Engine::checkStartTime(kOwner, startTime)) return detail::report(e);
+    if (SettingsError e = detail::requireFinite(kOwner, "state", state)) return detail::report(e);
+    if (SettingsError e = Engine::checkResetCovariance(kOwner, covariance)) return detail::report(e);
+    this->resetEstimate(state, covariance);
+    this->restartTime(startTime);
+    return ResetResult();
+  }
 
  private:
   static constexpr const char* kOwner = "mjukf::Ukf";

@@ -996,6 +996,12 @@ class UnscentedEngine {
   }
   // Commits a reset that checkResetCovariance() accepted: cannot fail.
   void resetEstimate(const Vector& mean, const Matrix& covariance) { estimate_.assign(mean, covariance); }
+  // The start time of a new pass over a record (startPass()), checked like an initial value.
+  static SettingsError checkStartTime(const char* owner, Scalar startTime) {
+    return requireFinite(owner, "startTime", startTime);
+  }
+  // A new pass starts at the record's t₀: time() is where the next measurement's input is read.
+  void restartTime(Scalar startTime) { time_ = startTime; }
 
   // ---- The skeleton --------------------------------------------------------------------------------
 
