@@ -140,7 +140,7 @@ TEST(MultiPass, ModifiedJointUkfSecondPassStartsWhereTheFirstEnded) {
   pass(filter);
   const double afterSecond = std::abs(filter.parameters()(0) - 6.0);
   std::printf("|k_flow - 6| after pass 1: %.3g, after pass 2: %.3g\n", afterFirst, afterSecond);
-  EXPECT_LT(afterFirst, 0.05);  // measured: 6.7e-3
+  EXPECT_LT(afterFirst, 0.05);         // measured: 6.7e-3
   EXPECT_LT(afterSecond, afterFirst);  // measured: 7.4e-4
 }
 

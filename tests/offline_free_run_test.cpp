@@ -64,10 +64,9 @@ TEST(FreeRun, EqualsSimulateBitForBit) {
   const Tank::State last = freeRun(model, Rk4(), x0, Tank::trueParameters(), inputs, sampling, outputs);
 
   std::vector<Tank::Meas> expected;
-  const Tank::State end = mjukf::simulate(model, Rk4(), x0, Tank::Input(4.0), Tank::trueParameters(), 0.25, 0.1,
-                                          long(n) - 1, [&](long, double, const Tank::State& x) {
-                                            expected.push_back(model.measurement(x, Tank::trueParameters()));
-                                          });
+  const Tank::State end = mjukf::simulate(
+      model, Rk4(), x0, Tank::Input(4.0), Tank::trueParameters(), 0.25, 0.1, long(n) - 1,
+      [&](long, double, const Tank::State& x) { expected.push_back(model.measurement(x, Tank::trueParameters())); });
   ASSERT_EQ(expected.size(), n);
   for (std::size_t k = 0; k < n; ++k) ASSERT_TRUE(bitwiseEqual(outputs[k], expected[k])) << "sample " << k;
   EXPECT_TRUE(bitwiseEqual(last, end));
@@ -114,9 +113,9 @@ TEST(FreeRun, RefusesBadArguments) {
   const Tank model;
   std::vector<Tank::Meas> outputs(5);
   const auto inputs = inputRecord(4);
-  EXPECT_THROW(freeRun(model, Rk4(), Tank::State(1, 1), Tank::trueParameters(), inputs, Sampling<double>{0, 1, 1},
-                       outputs),
-               std::invalid_argument)
+  EXPECT_THROW(
+      freeRun(model, Rk4(), Tank::State(1, 1), Tank::trueParameters(), inputs, Sampling<double>{0, 1, 1}, outputs),
+      std::invalid_argument)
       << "fewer inputs than outputs";
   const auto enough = inputRecord(5);
   for (const Sampling<double>& bad :
@@ -212,9 +211,8 @@ TEST(InitialState, RecoversTheUnmeasuredLevelFromFiveNoiseFreeSamples) {
   const auto y = lowerLevel(kTruth);
   Settings settings;
   settings.fixed << false, true;  // h₂ is measured: held at y₀
-  const auto fixed = mjukf::offline::estimateInitialState(kPlant, Rk4(), Tank::trueParameters(),
-                                                          inputRecord(kSamples), y, kSampling, kSamples,
-                                                          Tank::State(2, y[0](0)), settings);
+  const auto fixed = mjukf::offline::estimateInitialState(kPlant, Rk4(), Tank::trueParameters(), inputRecord(kSamples),
+                                                          y, kSampling, kSamples, Tank::State(2, y[0](0)), settings);
   EXPECT_TRUE(fixed.converged);
   EXPECT_TRUE(fixed.observable);
   EXPECT_NEAR(fixed.state(0), 8.0, 1e-8);
@@ -262,8 +260,8 @@ TEST(InitialState, WithNoiseTheErrorIsWithinTheLinearisedBound) {
   for (int d = 0; d < draws; ++d) {
     auto y = exact;
     for (auto& v : y) v(0) += normal(random);
-    const auto e = mjukf::offline::estimateInitialState(kPlant, Rk4(), Tank::trueParameters(), inputRecord(kSamples),
-                                                        y, kSampling, kSamples, Tank::State(4, y[0](0)), settings);
+    const auto e = mjukf::offline::estimateInitialState(kPlant, Rk4(), Tank::trueParameters(), inputRecord(kSamples), y,
+                                                        kSampling, kSamples, Tank::State(4, y[0](0)), settings);
     ASSERT_TRUE(e.converged) << "draw " << d;
     if (d == 0) {
       EXPECT_NEAR(e.covariance(0, 0), expectedCovariance(0, 0), 0.05 * expectedCovariance(0, 0))
@@ -295,17 +293,17 @@ TEST(InitialState, OneSampleDoesNotDetermineTheUpperLevel) {
 TEST(InitialState, RefusesBadArguments) {
   const auto y = lowerLevel(kTruth);
   const auto inputs = inputRecord(kSamples);
-  EXPECT_THROW(mjukf::offline::estimateInitialState(kPlant, Rk4(), Tank::trueParameters(), inputs, y, kSampling, 0,
-                                                    kTruth),
-               std::invalid_argument);
-  EXPECT_THROW(mjukf::offline::estimateInitialState(kPlant, Rk4(), Tank::trueParameters(), inputs, y, kSampling, 6,
-                                                    kTruth),
-               std::invalid_argument);
+  EXPECT_THROW(
+      mjukf::offline::estimateInitialState(kPlant, Rk4(), Tank::trueParameters(), inputs, y, kSampling, 0, kTruth),
+      std::invalid_argument);
+  EXPECT_THROW(
+      mjukf::offline::estimateInitialState(kPlant, Rk4(), Tank::trueParameters(), inputs, y, kSampling, 6, kTruth),
+      std::invalid_argument);
   Settings bad;
   bad.noiseStd << 0.0;
-  EXPECT_THROW(mjukf::offline::estimateInitialState(kPlant, Rk4(), Tank::trueParameters(), inputs, y, kSampling, 5,
-                                                    kTruth, bad),
-               std::invalid_argument);
+  EXPECT_THROW(
+      mjukf::offline::estimateInitialState(kPlant, Rk4(), Tank::trueParameters(), inputs, y, kSampling, 5, kTruth, bad),
+      std::invalid_argument);
 }
 
 }  // namespace

@@ -167,7 +167,9 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
     Transformation transformation;
     Param scalings;
   };
-  Knowledge knowledge() const { return Knowledge{parameters_, parameterPoints_, sensitivity_, transformation_, scalings_}; }
+  Knowledge knowledge() const {
+    return Knowledge{parameters_, parameterPoints_, sensitivity_, transformation_, scalings_};
+  }
   void startPass(const Knowledge& k) {
     parameters_ = k.parameters;
     parameterPoints_ = k.parameterPoints;

@@ -129,7 +129,8 @@ typename Model::State freeRun(const Model& model, const Integrator& integrator, 
   const bool valid = (detail::validSampling(sampling) || detail::refuse("freeRun: the sampling is not valid")) &&
                      (inputs.size() >= outputs.size() || detail::refuse("freeRun: fewer inputs than outputs"));
   if (!valid) {
-    for (std::size_t k = 0; k < outputs.size(); ++k) outputs[k] = Meas::Constant(std::numeric_limits<typename Model::Scalar>::quiet_NaN());
+    for (std::size_t k = 0; k < outputs.size(); ++k)
+      outputs[k] = Meas::Constant(std::numeric_limits<typename Model::Scalar>::quiet_NaN());
     return Model::State::Constant(std::numeric_limits<typename Model::Scalar>::quiet_NaN());
   }
   return detail::freeRunWith(model, integrator, x0, theta, detail::HeldSamples<Model, Inputs>{inputs}, sampling,
@@ -145,7 +146,8 @@ typename Model::State freeRun(const Model& model, const Integrator& integrator, 
   using Meas = typename Model::Meas;
   static_assert(needsNoInputArgument<Model>, "this model has no input(t): pass the inputs, one per sample");
   if (!(detail::validSampling(sampling) || detail::refuse("freeRun: the sampling is not valid"))) {
-    for (std::size_t k = 0; k < outputs.size(); ++k) outputs[k] = Meas::Constant(std::numeric_limits<typename Model::Scalar>::quiet_NaN());
+    for (std::size_t k = 0; k < outputs.size(); ++k)
+      outputs[k] = Meas::Constant(std::numeric_limits<typename Model::Scalar>::quiet_NaN());
     return Model::State::Constant(std::numeric_limits<typename Model::Scalar>::quiet_NaN());
   }
   return detail::freeRunWith(model, integrator, x0, theta, detail::OwnSignal<Model>{model}, sampling, outputs.size(),

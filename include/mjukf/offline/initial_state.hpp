@@ -91,8 +91,8 @@ struct InitialStateProblem {
     for (int i = 0; i < N; ++i) {
       starts.col(i) = x0;
       if (!jacobian || settings.fixed(i)) continue;
-      const Scalar step = std::sqrt(std::numeric_limits<Scalar>::epsilon()) *
-                          std::max(std::abs(x0(i)), settings.typicalScale(i));
+      const Scalar step =
+          std::sqrt(std::numeric_limits<Scalar>::epsilon()) * std::max(std::abs(x0(i)), settings.typicalScale(i));
       starts(i, i) = x0(i) + step;
       delta(i) = starts(i, i) - x0(i);  // the step as represented
     }
@@ -108,8 +108,7 @@ struct InitialStateProblem {
       Eigen::Matrix<Scalar, M, N> j = Eigen::Matrix<Scalar, M, N>::Zero();
       if (jacobian)
         for (int i = 0; i < N; ++i)
-          if (!settings.fixed(i))
-            j.col(i) = (measureModel(model, State(starts.col(i)), u, theta) - nominal) / delta(i);
+          if (!settings.fixed(i)) j.col(i) = (measureModel(model, State(starts.col(i)), u, theta) - nominal) / delta(i);
       typename Model::Meas r;
       for (int c = 0; c < M; ++c) {
         const bool present = !std::isnan(measured[k](c));
@@ -131,7 +130,9 @@ struct InitialStateProblem {
           if (!settings.fixed(i))
             starts.col(i) = inputs.advance(model, integrator, State(starts.col(i)), theta, k, t, h, sampling.subSteps);
     }
-    return std::isfinite(cost) && mjukf::detail::allFinite(a) && mjukf::detail::allFinite(b) ? cost : std::numeric_limits<Scalar>::infinity();
+    return std::isfinite(cost) && mjukf::detail::allFinite(a) && mjukf::detail::allFinite(b)
+               ? cost
+               : std::numeric_limits<Scalar>::infinity();
   }
 };
 
