@@ -48,8 +48,10 @@ struct InitialStateEstimate {
   /// linearised covariance of x̂₀ when the noise is white with that standard deviation. +∞ on the
   /// diagonal of the free components when JᵀWJ is singular (not observable over these samples).
   Eigen::Matrix<Scalar, StateDim, StateDim> covariance;
-  /// ½ Σ_k ‖W^½ (y_k − ŷ_k)‖² at the guess and at x̂₀.
-  Scalar initialCost = 0, cost = 0;
+  /// ½ Σ_k ‖W^½ (y_k − ŷ_k)‖² at the guess.
+  Scalar initialCost = 0;
+  /// ½ Σ_k ‖W^½ (y_k − ŷ_k)‖² at x̂₀.
+  Scalar cost = 0;
   /// The condition number of JᵀWJ on the free components scaled by `typicalScale`: large (against
   /// 1 / ε) when the samples hardly tell some combination of the free states apart.
   Scalar conditionNumber = 0;
@@ -207,19 +209,19 @@ auto estimateInitialStateWith(const Problem& problem, const typename Problem::St
   result.cost = cost;
 
   // The covariance and the conditioning on the free components (fixed ones: unit row and column).
-  Matrix free = a;
+  Matrix freeBlock = a;
   int freeCount = 0;
   for (int i = 0; i < N; ++i) {
     if (s.fixed(i)) {
-      free.row(i).setZero();
-      free.col(i).setZero();
-      free(i, i) = Scalar(1);
+      freeBlock.row(i).setZero();
+      freeBlock.col(i).setZero();
+      freeBlock(i, i) = Scalar(1);
     } else {
       ++freeCount;
     }
   }
   Matrix factor;
-  result.observable = freeCount > 0 && mjukf::detail::choleskyLower(free, factor);
+  result.observable = freeCount > 0 && mjukf::detail::choleskyLower(freeBlock, factor);
   if (result.observable) {
     Matrix inverse = Matrix::Identity();
     mjukf::detail::solveLowerInPlace(factor, inverse);
@@ -230,7 +232,7 @@ auto estimateInitialStateWith(const Problem& problem, const typename Problem::St
     for (int i = 0; i < N; ++i)
       if (!s.fixed(i)) result.covariance(i, i) = inf;
   }
-  Matrix scaled = s.typicalScale.asDiagonal() * free * s.typicalScale.asDiagonal();
+  Matrix scaled = s.typicalScale.asDiagonal() * freeBlock * s.typicalScale.asDiagonal();
   for (int i = 0; i < N; ++i)
     if (s.fixed(i)) scaled(i, i) = scaled.diagonal().maxCoeff();  // neutral: does not set the condition
   const Eigen::SelfAdjointEigenSolver<Matrix> eigen(scaled, Eigen::EigenvaluesOnly);
