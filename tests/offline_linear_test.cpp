@@ -116,7 +116,9 @@ struct Recording {
   std::vector<LinearPlant::Meas> y;
   std::vector<LinearPlant::Input> u;
   int steps = 1;
-  mjukf::offline::DataSet<LinearPlant> data() const { return mjukf::offline::dataSet<LinearPlant>(0.0, 0.1, y, u, steps); }
+  mjukf::offline::DataSet<LinearPlant> data() const {
+    return mjukf::offline::dataSet<LinearPlant>(0.0, 0.1, y, u, steps);
+  }
 };
 
 Recording record(int steps, unsigned seed) {

@@ -94,10 +94,9 @@ LogLikelihood<typename Filter::Scalar> logLikelihood(Filter& filter, const DataS
 /// error.
 template <class Model, class Integrator = DefaultIntegrator<Model>>
 LogLikelihood<typename Model::Scalar> logLikelihood(const Model& model, const typename Model::Param& parameters,
-                                                   const typename Model::State& initialState,
-                                                   const UkfSettingsFor<Model>& settings,
-                                                   const DataSet<Model>& data,
-                                                   const Integrator& integrator = Integrator()) {
+                                                    const typename Model::State& initialState,
+                                                    const UkfSettingsFor<Model>& settings, const DataSet<Model>& data,
+                                                    const Integrator& integrator = Integrator()) {
   auto filter = Ukf<Model, Integrator>::create(model, initialState, parameters, settings, integrator);
   if (!filter) {
     LogLikelihood<typename Model::Scalar> failed;

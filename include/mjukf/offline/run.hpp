@@ -136,9 +136,9 @@ struct Sample : detail::ParameterCovarianceField<typename Filter::Scalar, Filter
 
 /// What a whole run did: how many of its calls were refused.
 struct RunSummary {
-  long samples = 0;                   ///< samples run
-  long refusedTimeUpdates = 0;        ///< time updates refused (their measurement update not called)
-  long refusedMeasurementUpdates = 0; ///< measurement updates called and refused (gate included)
+  long samples = 0;                    ///< samples run
+  long refusedTimeUpdates = 0;         ///< time updates refused (their measurement update not called)
+  long refusedMeasurementUpdates = 0;  ///< measurement updates called and refused (gate included)
 };
 
 /// The present components of y (its finite ones; a NaN is missing), and how many.
@@ -180,8 +180,8 @@ void runSample(Filter& filter, const DataSet<typename Filter::Model>& data, long
       sample.measurementUpdate = all ? filter.measurementUpdate(y, u) : filter.measurementUpdate(y, u, present);
     } else if constexpr (measurementTakesInput<Model>) {
       if (data.inputs)
-        sample.measurementUpdate = all ? filter.measurementUpdate(y, data.inputs[k])
-                                       : filter.measurementUpdate(y, data.inputs[k], present);
+        sample.measurementUpdate =
+            all ? filter.measurementUpdate(y, data.inputs[k]) : filter.measurementUpdate(y, data.inputs[k], present);
       else  // the model's own input(t) at the filter's time
         sample.measurementUpdate = all ? filter.measurementUpdate(y) : filter.measurementUpdate(y, present);
     } else {
@@ -202,7 +202,8 @@ void runSample(Filter& filter, const DataSet<typename Filter::Model>& data, long
 /// Runs `filter` from where it is over every sample of `data` (runSample) and calls
 /// `visit(long k, const Sample<Filter>&)` after each, in order. Allocates nothing itself. Returns what
 /// was refused; the filter is left after the last sample.
-template <class Filter, class Visit, std::enable_if_t<std::is_invocable_v<Visit&, long, const Sample<Filter>&>, int> = 0>
+template <class Filter, class Visit,
+          std::enable_if_t<std::is_invocable_v<Visit&, long, const Sample<Filter>&>, int> = 0>
 RunSummary run(Filter& filter, const DataSet<typename Filter::Model>& data, Visit&& visit) {
   RunSummary summary;
   Sample<Filter> sample;

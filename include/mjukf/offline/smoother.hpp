@@ -81,8 +81,8 @@ struct SmoothedSample {
   /// Its covariance.
   using Matrix = Eigen::Matrix<Scalar, Dim, Dim>;
 
-  Scalar time = 0;                  ///< t_{k+1}, as in the filter's Sample
-  Vector mean = Vector::Zero();     ///< the smoothed mean
+  Scalar time = 0;                     ///< t_{k+1}, as in the filter's Sample
+  Vector mean = Vector::Zero();        ///< the smoothed mean
   Matrix covariance = Matrix::Zero();  ///< the smoothed covariance
 
   /// The state block x of the mean.
@@ -156,7 +156,7 @@ SmootherOutcome smooth(const Filter& filter, const DataSet<typename Filter::Mode
       smoothed[k].covariance = smoothed[next].covariance;
       continue;
     }
-    const Vector mean = smoothed[k].mean;          // still the filtered x_k
+    const Vector mean = smoothed[k].mean;              // still the filtered x_k
     const Matrix covariance = smoothed[k].covariance;  // and P_k
     if (sigmaPoints.generate(mean, covariance, drawn) != Status::Ok) return {Status::NotPositiveDefinite, k};
     // Φ over sample next's interval, with its held input or the model's own input(t), as runSample's
