@@ -281,6 +281,7 @@ TEST(OfflineLikelihood, ScoresAParameterVector) {
     }
     if (sum.value > best) best = sum.value, bestTheta = theta;
   }
+  std::printf("the largest log-likelihood on the grid: theta = %.1f (the data's: %.1f)\n", bestTheta, kTheta(0));
   EXPECT_NEAR(bestTheta, kTheta(0), 0.3);
   // Invalid settings: −∞ and the error, never a value.
   auto bad = ukfSettings();
