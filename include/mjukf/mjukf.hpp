@@ -3,8 +3,9 @@
 /// \file
 /// Umbrella header: the whole core API of mjukf, the filters, their settings, the steppers and the
 /// concepts they rest on. Not included: the example plants (`mjukf/models/<plant>.hpp`, each included
-/// on its own), the SUNDIALS adapter (`mjukf/sundials/cvode.hpp`, which needs SUNDIALS) and the CSV
-/// reader of recorded data (`mjukf/io/csv_reader.hpp`, which needs iostreams and the heap).
+/// on its own), the SUNDIALS adapter (`mjukf/sundials/cvode.hpp`, which needs SUNDIALS), the CSV
+/// reader of recorded data (`mjukf/io/csv_reader.hpp`, which needs iostreams and the heap) and the
+/// host-side tools over a whole record (`mjukf/offline/`: run, smoother, log-likelihood).
 
 #include "mjukf/covariance_form.hpp"
 #include "mjukf/covariance_repair.hpp"
