@@ -10,6 +10,7 @@
 #include "mjukf/measurement_gating.hpp"
 #include "mjukf/parameter_bounds.hpp"
 #include "mjukf/sigma_points.hpp"
+#include "mjukf/step_check.hpp"
 
 namespace mjukf {
 
@@ -42,6 +43,9 @@ struct UnscentedSettings {
   CovarianceRepair<Scalar> repair;
   /// The innovation gate of the measurement update (measurement_gating.hpp); off by default.
   MeasurementGate<Scalar, MeasDim> gate;
+  /// The check of the integration step against the model's dynamics (step_check.hpp): an oversized
+  /// step is refused by default.
+  StepCheck<Scalar> stepCheck;
 };
 
 /// The shared settings of a filter that also estimates `ParamDim` parameters. Every field:

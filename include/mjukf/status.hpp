@@ -31,6 +31,10 @@ enum class Status {
   /// The measurement update was refused by the gate: its normalised innovation squared exceeded the
   /// threshold (measurement_gating.hpp). The estimate is unchanged; the measurement was an outlier.
   MeasurementRejected,
+  /// The integration step is too large for the model's dynamics: its step doubling error estimate
+  /// exceeded the tolerance (step_check.hpp), and the settings say to refuse such a step (or it still
+  /// did after the largest number of halvings).
+  StepTooLarge,
 };
 
 /// True when the step was taken (`Ok` or `Repaired`), false when it was refused.
@@ -48,6 +52,7 @@ constexpr const char* toString(Status status) noexcept {
     case Status::NonFiniteResult: return "non-finite result";
     case Status::Repaired: return "ok after a covariance repair";
     case Status::MeasurementRejected: return "measurement rejected by the gate";
+    case Status::StepTooLarge: return "integration step too large for the model's dynamics";
   }
   return "unknown status";
 }

@@ -129,6 +129,7 @@ void check(const Filter& after, const Filter& before, mjukf::Status status) {
     case Status::InnovationNotPositiveDefinite:
     case Status::NonFiniteResult:
     case Status::MeasurementRejected:
+    case Status::StepTooLarge:
       if (!unchanged(after, before)) fail("a refused call changed the filter");
       return;
   }

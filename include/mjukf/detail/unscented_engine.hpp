@@ -13,6 +13,7 @@
 //
 // The arithmetic itself is in detail/linear_algebra.hpp.
 
+#include <limits>
 #include <type_traits>
 
 #include <Eigen/Core>
@@ -51,7 +52,13 @@ namespace mjukf::detail {
 template <class Model>
 struct SignalInput {
   const Model& model;
-  typename Model::Input operator()(typename Model::Scalar t) const { return model.input(t); }
+  mutable bool nonFinite = false;  // whether input(t) gave NaN or ±Inf at a time it was asked for
+  typename Model::Input operator()(typename Model::Scalar t) const {
+    typename Model::Input u = model.input(t);
+    nonFinite = nonFinite || !allFinite(u);
+    return u;
+  }
+  bool allValuesFinite() const { return !nonFinite; }
 };
 
 // The model's own input signal u(t) for a time update, which propagates all its sigma points over the
@@ -77,8 +84,12 @@ class SharedSignalInput {
     if (size_ < Capacity) ++size_;
     times_[slot] = t;
     values_[slot] = model_.input(t);
+    nonFinite_ = nonFinite_ || !allFinite(values_[slot]);
     return hit(slot);
   }
+
+  // Whether every value input(t) gave in this call was finite (checked once per distinct time).
+  bool allValuesFinite() const { return !nonFinite_; }
 
  private:
   // Enough for the stage times of one step of any stepper here (I-TR-BDF2 and RK4 have 3).
@@ -95,6 +106,7 @@ class SharedSignalInput {
   mutable int size_ = 0;
   mutable int next_ = 0;
   mutable int hint_ = 0;
+  mutable bool nonFinite_ = false;
 };
 
 // An input held constant over the step (zero-order hold), for inputs known only as samples.
@@ -102,6 +114,7 @@ template <class Model>
 struct HeldInput {
   const typename Model::Input& value;
   const typename Model::Input& operator()(typename Model::Scalar /*t*/) const { return value; }
+  bool allValuesFinite() const { return true; }  // the caller checked it before the step
 };
 
 template <class Scalar>
@@ -973,6 +986,7 @@ class UnscentedEngine {
     if (SettingsError e = requirePositiveSemiDefinite(owner, "processNoise (Q)", settings.processNoise)) return e;
     if (SettingsError e = requirePositiveDefinite(owner, "measurementNoise (R)", settings.measurementNoise)) return e;
     if (SettingsError e = validateRepair(owner, settings.repair)) return e;
+    if (SettingsError e = validateStepCheck(owner, settings.stepCheck)) return e;
     return validateGate(owner, settings.gate);
   }
 
@@ -1008,13 +1022,71 @@ class UnscentedEngine {
   template <class InputSource>
   using Step = TimeStep<Model, Integrator, InputSource, Settings>;
 
+  // The step check (step_check.hpp) of a call from t over `steps` steps of h: Ok when the step
+  // passes or is not due for a check; with OversizedStep::Subdivide, h is halved and `steps` doubled
+  // until it passes (the same subdivision is then applied to the same request until its next check);
+  // StepTooLarge otherwise. Only the mean is propagated here, into locals: nothing is committed.
+  template <class InputSource>
+  Status checkIntegrationStep(const InputSource& input, Scalar t, Scalar& h, int& steps) {
+    if constexpr (isDiscreteTime<Model>) {
+      return Status::Ok;
+    } else {
+      const StepCheck<Scalar>& check = settings_.stepCheck;
+      if (check.onOversized == OversizedStep::Accept) return Status::Ok;
+      const bool sameRequest = h == checkedStepSize_ && steps == checkedStepCount_;
+      if (sameRequest && ++callsSinceStepCheck_ < check.interval) {
+        h /= Scalar(1 << checkedHalvings_);
+        steps <<= checkedHalvings_;
+        return Status::Ok;
+      }
+      const Scalar requestedSize = h;
+      const int requestedCount = steps;
+      const Vector& mean = estimate_.mean();
+      Vector full = policy_.propagateMean(Step<InputSource>{model_, integrator_, settings_, input, t, h, steps}, mean);
+      for (int halvings = 0;; ++halvings) {
+        const Vector halves =
+            policy_.propagateMean(Step<InputSource>{model_, integrator_, settings_, input, t, h / 2, 2 * steps}, mean);
+        if (stepErrorWithinTolerance(full, halves, mean, check.tolerance)) {
+          checkedStepSize_ = requestedSize;
+          checkedStepCount_ = requestedCount;
+          checkedHalvings_ = halvings;
+          callsSinceStepCheck_ = 0;
+          return Status::Ok;
+        }
+        if (check.onOversized != OversizedStep::Subdivide || halvings == check.maxHalvings ||
+            steps > std::numeric_limits<int>::max() / 4)
+          return Status::StepTooLarge;
+        h /= 2;
+        steps *= 2;
+        full = halves;
+      }
+    }
+  }
+
+  // |eᵢ| ≤ tolerance (|Δᵢ| + σᵢ) for every component (step_check.hpp); false on NaN.
+  bool stepErrorWithinTolerance(const Vector& full, const Vector& halves, const Vector& mean, Scalar tolerance) const {
+    using std::abs, std::sqrt;
+    const Matrix& covariance = estimate_.covariance();
+    for (int i = 0; i < L; ++i) {
+      const Scalar error = abs(full(i) - halves(i));
+      const Scalar scale = abs(halves(i) - mean(i)) + sqrt(covariance(i, i) > 0 ? covariance(i, i) : Scalar(0));
+      if (!(error <= tolerance * scale)) return false;
+    }
+    return true;
+  }
+
   template <class InputSource>
   Status timeUpdateWith(const InputSource& input, Scalar t, Scalar h, int steps) {
     if (const Status s = checkStep(t, h, steps); s != Status::Ok) return s;
+    const Status checked = checkIntegrationStep(input, t, h, steps);  // may subdivide h
+    if (!input.allValuesFinite()) return Status::NonFiniteInput;
+    if (checked != Status::Ok) return checked;
     const Step<InputSource> step{model_, integrator_, settings_, input, t, h, steps};
     const Status parameters = policy_.predictParameters(step, estimate_);
+    if (!input.allValuesFinite()) return Status::NonFiniteInput;
     if (!taken(parameters)) return parameters;
     const Status settled = predict(step, estimate_.mean(), estimate_.factor());
+    if (!input.allValuesFinite()) return Status::NonFiniteInput;  // the model's input(t) gave NaN or ±Inf
     if (!taken(settled)) return settled;
     policy_.constrainMean(estimate_.candidateMean());
     estimate_.commitPrediction();
@@ -1038,8 +1110,12 @@ class UnscentedEngine {
   template <class InputSource>
   Status propagateMeanWith(const InputSource& input, Scalar t, Scalar h, int steps) {
     if (const Status s = checkStep(t, h, steps); s != Status::Ok) return s;
+    const Status checked = checkIntegrationStep(input, t, h, steps);  // may subdivide h
+    if (!input.allValuesFinite()) return Status::NonFiniteInput;
+    if (checked != Status::Ok) return checked;
     const Step<InputSource> step{model_, integrator_, settings_, input, t, h, steps};
     const Vector mean = policy_.propagateMean(step, estimate_.mean());
+    if (!input.allValuesFinite()) return Status::NonFiniteInput;  // the model's input(t) gave NaN or ±Inf
     if (!allFinite(mean)) return Status::NonFiniteResult;
     estimate_.commitMean(mean);
     policy_.commitOpenLoop(step.interval());
@@ -1107,6 +1183,11 @@ class UnscentedEngine {
   Est estimate_;
   Policy policy_;
   Scalar time_ = 0;  // where the last time update or open-loop propagation ended
+  // The last request (h, steps) the step check passed, the halvings it needed, and the calls since.
+  Scalar checkedStepSize_ = 0;
+  int checkedStepCount_ = 0;
+  int checkedHalvings_ = 0;
+  int callsSinceStepCheck_ = 0;
 
  private:
   // The input of a model without one (InputDim = 0): an empty vector, held over every step.
