@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 
 #include "mjukf/covariance_repair.hpp"
+#include "mjukf/health.hpp"
 #include "mjukf/measurement_gating.hpp"
 #include "mjukf/parameter_bounds.hpp"
 #include "mjukf/sigma_points.hpp"
@@ -46,6 +47,8 @@ struct UnscentedSettings {
   /// The check of the integration step against the model's dynamics (step_check.hpp): an oversized
   /// step is refused by default.
   StepCheck<Scalar> stepCheck;
+  /// The health monitor (health.hpp): on by default; what `health()` reports.
+  HealthSettings<Scalar> health;
 };
 
 /// The shared settings of a filter that also estimates `ParamDim` parameters. Every field:

@@ -149,6 +149,10 @@ class JointUkf : public detail::EngineOf<JointUkf<Model_, Integrator_, PointSet,
   const AugmentedState& augmentedState() const { return this->estimate_.mean(); }
   /// Covariance of the augmented vector [x; θ].
   const AugmentedMatrix& covariance() const { return this->estimate_.covariance(); }
+  /// The θ block of the covariance, P_θθ: the uncertainty of `parameters()`.
+  Eigen::Matrix<Scalar, ParamDim, ParamDim> parameterCovariance() const {
+    return covariance().template bottomRightCorner<ParamDim, ParamDim>();
+  }
 
   /// Starts again from the state, the augmented covariance of [x; θ] and the current parameters.
   /// When one is not finite, the covariance is not symmetric positive definite, or the parameters lie

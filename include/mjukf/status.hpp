@@ -10,7 +10,8 @@ namespace mjukf {
 /// Two values mean the step was taken: `Status::Ok`, and `Status::Repaired` when the covariance the
 /// step produced had to be repaired before it was committed (see covariance_repair.hpp); test with
 /// `taken(status)`. Every other value means the call was refused and the filter is exactly as it was
-/// before the call: estimate, covariance, parameters, sigma points and diagnostics.
+/// before the call: estimate, covariance, parameters, sigma points and diagnostics. (Its health monitor
+/// counts the refusal: a streak of them is an alarm, health.hpp.)
 ///
 /// `Repaired` only occurs when a step would otherwise have been refused with `NotPositiveDefinite`,
 /// so code written as `status == Status::Ok` keeps its meaning: it treats a repaired step as one to

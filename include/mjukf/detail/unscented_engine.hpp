@@ -24,6 +24,7 @@
 #include "mjukf/detail/validation.hpp"
 #include "mjukf/diagnostics.hpp"
 #include "mjukf/filter_settings.hpp"
+#include "mjukf/health.hpp"
 #include "mjukf/measurement_gating.hpp"
 #include "mjukf/model.hpp"
 #include "mjukf/result.hpp"
@@ -811,6 +812,19 @@ struct ParameterPolicy {
 // The status of a step made of two parts that were both taken: Repaired if either was.
 constexpr Status combineTaken(Status a, Status b) { return a == Status::Ok ? b : a; }
 
+// Whether a filter reports a covariance of its parameters (JointUkf, DualUkf), and whether its
+// settings have parameter bounds: what the health monitor's parameter tests use.
+template <class Filter, class = void>
+constexpr bool hasParameterCovariance = false;
+template <class Filter>
+constexpr bool hasParameterCovariance<Filter, std::void_t<decltype(std::declval<const Filter&>().parameterCovariance())>> =
+    true;
+template <class Settings, class = void>
+constexpr bool hasParameterBounds = false;
+template <class Settings>
+constexpr bool hasParameterBounds<Settings, std::void_t<decltype(std::declval<const Settings&>().parameterBounds)>> =
+    true;
+
 /// The per-step calls every filter shares: `Ukf`, `JointUkf`, `ModifiedJointUkf` and `DualUkf` derive
 /// from this engine and inherit its public members. Each call returns a Status; one other than Ok or
 /// Repaired leaves the filter exactly as it was (docs/robustness.md). `L` is the dimension of the
@@ -933,6 +947,15 @@ class UnscentedEngine {
   /// `input(time())`.
   Scalar time() const { return time_; }
 
+  /// The health monitor's verdict (health.hpp): `Health::Ok` when no test has failed since construction,
+  /// `reset` or `clearHealth()`; otherwise the first alarm, which stays until one of those.
+  Health health() const { return health_.health(); }
+  /// The statistics behind `health()`: the last block's normalised NIS and autocorrelation against their
+  /// bounds, the parameters' motion, counts of blocks, alarms and refusals in a row.
+  const HealthStatistics<Scalar>& healthStatistics() const { return health_.statistics(); }
+  /// Clears the latched alarm (after the user acted on it); the statistics go on.
+  void clearHealth() { health_.clearAlarm(); }
+
   /// The filter built from these initial values and settings, or the SettingsError naming the first
   /// invalid one (Filter::validate): the way to build a filter without exceptions (docs/embedded.md).
   /// The filter is built once, in place in the Result (result.hpp). For Ukf, `initialParameters` are
@@ -987,6 +1010,7 @@ class UnscentedEngine {
     if (SettingsError e = requirePositiveDefinite(owner, "measurementNoise (R)", settings.measurementNoise)) return e;
     if (SettingsError e = validateRepair(owner, settings.repair)) return e;
     if (SettingsError e = validateStepCheck(owner, settings.stepCheck)) return e;
+    if (SettingsError e = validateHealth(owner, settings.health)) return e;
     return validateGate(owner, settings.gate);
   }
 
@@ -998,7 +1022,8 @@ class UnscentedEngine {
         integrator_(integrator),
         settings_(settings),
         estimate_(Validated{}, settings.sigmaPoints, settings.processNoise, settings.measurementNoise),
-        policy_(settings, initialParameters) {
+        policy_(settings, initialParameters),
+        health_(settings.health) {
     // symmetrised, as every committed P is
     estimate_.assign(Filter::initialMean(initialState, initialParameters), settings.initialCovariance);
   }
@@ -1009,13 +1034,19 @@ class UnscentedEngine {
     return requireCommittableCovariance(owner, "covariance", covariance);
   }
   // Commits a reset that checkResetCovariance() accepted: cannot fail.
-  void resetEstimate(const Vector& mean, const Matrix& covariance) { estimate_.assign(mean, covariance); }
+  void resetEstimate(const Vector& mean, const Matrix& covariance) {
+    estimate_.assign(mean, covariance);
+    health_.clear();
+  }
   // The start time of a new pass over a record (startPass()), checked like an initial value.
   static SettingsError checkStartTime(const char* owner, Scalar startTime) {
     return requireFinite(owner, "startTime", startTime);
   }
   // A new pass starts at the record's t₀: time() is where the next measurement's input is read.
-  void restartTime(Scalar startTime) { time_ = startTime; }
+  void restartTime(Scalar startTime) {
+    time_ = startTime;
+    health_.restartBlock();
+  }
 
   // ---- The skeleton --------------------------------------------------------------------------------
 
@@ -1077,6 +1108,12 @@ class UnscentedEngine {
 
   template <class InputSource>
   Status timeUpdateWith(const InputSource& input, Scalar t, Scalar h, int steps) {
+    const Status status = timeUpdateUnmonitored(input, t, h, steps);
+    health_.observeStatus(status);
+    return status;
+  }
+  template <class InputSource>
+  Status timeUpdateUnmonitored(const InputSource& input, Scalar t, Scalar h, int steps) {
     if (const Status s = checkStep(t, h, steps); s != Status::Ok) return s;
     const Status checked = checkIntegrationStep(input, t, h, steps);  // may subdivide h
     if (!input.allValuesFinite()) return Status::NonFiniteInput;
@@ -1109,6 +1146,12 @@ class UnscentedEngine {
 
   template <class InputSource>
   Status propagateMeanWith(const InputSource& input, Scalar t, Scalar h, int steps) {
+    const Status status = propagateMeanUnmonitored(input, t, h, steps);
+    health_.observeStatus(status);
+    return status;
+  }
+  template <class InputSource>
+  Status propagateMeanUnmonitored(const InputSource& input, Scalar t, Scalar h, int steps) {
     if (const Status s = checkStep(t, h, steps); s != Status::Ok) return s;
     const Status checked = checkIntegrationStep(input, t, h, steps);  // may subdivide h
     if (!input.allValuesFinite()) return Status::NonFiniteInput;
@@ -1140,10 +1183,33 @@ class UnscentedEngine {
   // The measurement update: the policy says in which order its parts run (every filter but the dual
   // one calls correctState). The input reaches g, and is checked, only when the measurement takes it.
   Status updateWithInput(const Meas& y, const Input& u, const Mask* present) {
+    const Status status = updateUnmonitored(y, u, present);
+    health_.observeStatus(status);
+    if (taken(status)) observeCommittedUpdate(present);
+    return status;
+  }
+  Status updateUnmonitored(const Meas& y, const Input& u, const Mask* present) {
     if (!presentComponentsFinite(y, present)) return Status::NonFiniteMeasurement;
     if constexpr (measurementTakesInput<Model>)
       if (!allFinite(u)) return Status::NonFiniteInput;
     return policy_.update(static_cast<Filter&>(*this), y, u, present);
+  }
+
+  // What the health monitor sees of a committed update: its diagnostics, and the parameters with
+  // their standard deviations (where the filter has a covariance of them) and bounds.
+  void observeCommittedUpdate(const Mask* present) {
+    const Filter& filter = static_cast<const Filter&>(*this);
+    const Diagnostics& d = estimate_.diagnostics();
+    Param sigma = Param::Constant(Scalar(-1));
+    if constexpr (hasParameterCovariance<Filter>) sigma = filter.parameterCovariance().diagonal().cwiseSqrt();
+    Param lower = Param::Constant(-std::numeric_limits<Scalar>::infinity());
+    Param upper = Param::Constant(std::numeric_limits<Scalar>::infinity());
+    if constexpr (hasParameterBounds<Settings>) {
+      lower = settings_.parameterBounds.lower;
+      upper = settings_.parameterBounds.upper;
+    }
+    health_.observeUpdate(d.innovation, d.innovationCovariance, d.nis, present, filter.parameters(), sigma, lower,
+                          upper);
   }
 
   // §3 about the committed estimate, from the points of the last time update (or points drawn now).
@@ -1183,6 +1249,7 @@ class UnscentedEngine {
   Est estimate_;
   Policy policy_;
   Scalar time_ = 0;  // where the last time update or open-loop propagation ended
+  HealthMonitor<Scalar, MeasDim, ParamDim> health_;
   // The last request (h, steps) the step check passed, the halvings it needed, and the calls since.
   Scalar checkedStepSize_ = 0;
   int checkedStepCount_ = 0;

@@ -72,21 +72,11 @@ DataSet<Model> dataSet(typename Model::Scalar startTime, typename Model::Scalar 
 /// \cond INTERNAL
 namespace detail {
 
-// The parameter covariance of a filter that has one: JointUkf's θ block, DualUkf's parameter filter.
-// Ukf's parameters are known and ModifiedJointUkf keeps no covariance of θ (docs/offline-tools.md), so
-// their samples have no such member.
-template <class Filter, class = void>
-struct HasParameterCovariance : std::false_type {};
+// The parameter covariance of a filter that has one (`parameterCovariance()`): JointUkf's θ block,
+// DualUkf's parameter filter. Ukf's parameters are known and ModifiedJointUkf keeps no covariance of θ
+// (docs/offline-tools.md), so their samples have no such member.
 template <class Filter>
-struct HasParameterCovariance<Filter, std::void_t<decltype(std::declval<const Filter&>().parameterCovariance())>>
-    : std::true_type {};
-template <class Filter>
-struct IsJointUkf : std::false_type {};
-template <class M, class I, class P, class F>
-struct IsJointUkf<JointUkf<M, I, P, F>> : std::true_type {};
-
-template <class Filter>
-inline constexpr bool hasParameterCovariance = HasParameterCovariance<Filter>::value || IsJointUkf<Filter>::value;
+inline constexpr bool hasParameterCovariance = mjukf::detail::hasParameterCovariance<Filter>;
 
 template <class Scalar, int ParamDim, bool Present>
 struct ParameterCovarianceField {};
@@ -192,9 +182,7 @@ void runSample(Filter& filter, const DataSet<typename Filter::Model>& data, long
   sample.state = filter.state();
   sample.parameters = filter.parameters();
   sample.covariance = filter.covariance();
-  if constexpr (detail::IsJointUkf<Filter>::value)
-    sample.parameterCovariance = filter.covariance().template bottomRightCorner<Model::ParamDim, Model::ParamDim>();
-  else if constexpr (detail::hasParameterCovariance<Filter>)
+  if constexpr (detail::hasParameterCovariance<Filter>)
     sample.parameterCovariance = filter.parameterCovariance();
   sample.diagnostics = filter.lastUpdate();
 }

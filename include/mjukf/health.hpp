@@ -1,0 +1,301 @@
+#pragma once
+
+/// \file
+/// The health monitor of every filter: statistical tests of whether its estimate can still be
+/// trusted, on what each measurement update saw (docs/robustness.md, "The health monitor").
+
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Core>
+
+#include "mjukf/detail/validation.hpp"
+#include "mjukf/measurement_gating.hpp"
+#include "mjukf/settings_error.hpp"
+#include "mjukf/status.hpp"
+
+namespace mjukf {
+
+/// What a filter's health monitor concluded: `Health::Ok` means no alarm. Every other value names the
+/// first test that failed (docs/troubleshooting.md, "Health alarms", says what to change).
+enum class Health : unsigned char {
+  Ok,  ///< No test failed.
+  /// Over a block of updates the innovations were larger than their covariance P_yy says (the block's
+  /// summed NIS above its χ² bound): the filter is more confident than it should be, because its
+  /// covariance collapsed, Q or R is far too small, or the estimate has left the truth.
+  InnovationsTooLarge,
+  /// The innovations were smaller than P_yy says (summed NIS below its χ² bound): the covariance is far
+  /// larger than the errors, because it is exploding or Q or R is far too large.
+  InnovationsTooSmall,
+  /// Successive innovations were correlated (the lag-one autocorrelation of a normalised component
+  /// beyond its bound): the model does not explain the data, a wrong structure, a wrong fixed value, or
+  /// a change of a parameter the filter does not follow.
+  InnovationsCorrelated,
+  /// Within one block a parameter estimate moved by more than `runawaySigmas` of its own standard
+  /// deviation at the block's start: it is running away, not converging.
+  ParameterRunaway,
+  /// A parameter estimate ended a block on one of its `parameterBounds`: the data pull it beyond what
+  /// the bounds allow.
+  ParameterAtBound,
+  /// `refusalStreak` calls in a row were refused (any Status other than Ok and Repaired).
+  RepeatedRefusals,
+};
+
+/// A short English description of `health`, for logs and error messages.
+constexpr const char* toString(Health health) noexcept {
+  switch (health) {
+    case Health::Ok: return "ok";
+    case Health::InnovationsTooLarge: return "innovations larger than their covariance";
+    case Health::InnovationsTooSmall: return "innovations smaller than their covariance";
+    case Health::InnovationsCorrelated: return "innovations correlated in time";
+    case Health::ParameterRunaway: return "parameter estimate running away";
+    case Health::ParameterAtBound: return "parameter estimate at a bound";
+    case Health::RepeatedRefusals: return "repeated refusals";
+  }
+  return "unknown health";
+}
+
+/// The settings of the health monitor (every filter's `health` setting). The tests run on blocks of
+/// `window` committed measurement updates; each test has the false-alarm probability
+/// `falseAlarmProbability` per block on a consistent filter (a linear-Gaussian model with the true
+/// Q and R). Every field: docs/settings.md §2.
+template <class Scalar>
+struct HealthSettings {
+  /// false: no test runs, `health()` stays Ok, the statistics stay zero.
+  bool enabled = true;
+  /// Committed measurement updates per block, ≥ 10.
+  int window = 50;
+  /// The false-alarm probability of each test per block, in (0, 0.5). With three tests a block, a run
+  /// of 10⁴ updates (200 blocks) of a consistent filter raises a false alarm with probability ≈ 6e-4.
+  Scalar falseAlarmProbability = Scalar(1e-6);
+  /// A parameter moving more than this many of its standard deviations within a block is running
+  /// away; > 0. Only filters that report a parameter covariance (JointUkf, DualUkf) run this test.
+  Scalar runawaySigmas = Scalar(10);
+  /// Refused calls in a row that raise `RepeatedRefusals`, ≥ 1.
+  int refusalStreak = 10;
+};
+
+/// The numbers behind `health()` (a filter's `healthStatistics()`).
+template <class Scalar>
+struct HealthStatistics {
+  /// The first alarm since construction, `reset` or `clearHealth()`: what `health()` returns. Alarms
+  /// latch, so a run that went wrong and recovered still says so at its end.
+  Health latched = Health::Ok;
+  /// The verdict of the last complete block alone (Ok when it raised no alarm).
+  Health lastBlock = Health::Ok;
+  /// The committed measurement update at which the latched alarm was raised (counting from 1); 0 if none.
+  long alarmAtUpdate = 0;
+  /// Committed measurement updates since construction or `reset`.
+  long updates = 0;
+  /// Complete blocks, and blocks that raised an alarm.
+  long blocks = 0, alarmedBlocks = 0;
+  /// The last complete block's summed NIS over its degrees of freedom (1 on a consistent filter), and
+  /// the bounds it was tested against on the same scale.
+  Scalar normalisedNis = 0, nisLowerBound = 0, nisUpperBound = 0;
+  /// The last complete block's largest |√N r₁| over the measured components (r₁ the lag-one
+  /// autocorrelation of the component's normalised innovation; ~N(0, 1) when they are white), and its bound.
+  Scalar autocorrelationScore = 0, autocorrelationBound = 0;
+  /// The last complete block's largest parameter motion in standard deviations (0 without a covariance).
+  Scalar parameterMotionSigmas = 0;
+  /// Refused calls in a row, now.
+  int refusalsInARow = 0;
+};
+
+/// \cond INTERNAL
+namespace detail {
+
+template <class Scalar>
+SettingsError validateHealth(const char* owner, const HealthSettings<Scalar>& health) {
+  if (health.window < 10) return invalid(owner, "health.window", "must be >= 10");
+  if (SettingsError e = requireFinite(owner, "health.falseAlarmProbability", health.falseAlarmProbability)) return e;
+  if (!(health.falseAlarmProbability > 0 && health.falseAlarmProbability < Scalar(0.5)))
+    return invalid(owner, "health.falseAlarmProbability", "must be in (0, 0.5)");
+  if (SettingsError e = requireFinite(owner, "health.runawaySigmas", health.runawaySigmas)) return e;
+  if (!(health.runawaySigmas > 0)) return invalid(owner, "health.runawaySigmas", "must be positive");
+  if (health.refusalStreak < 1) return invalid(owner, "health.refusalStreak", "must be >= 1");
+  return {};
+}
+
+// The monitor: accumulates one block of updates at a time in fixed-size members (no allocation), and
+// tests a block when it is complete. Costs O(m) per update and O(m + p) per block.
+template <class Scalar, int MeasDim, int ParamDim>
+class HealthMonitor {
+ public:
+  using Meas = Eigen::Matrix<Scalar, MeasDim, 1>;
+  using Param = Eigen::Matrix<Scalar, ParamDim, 1>;
+  using Mask = Eigen::Matrix<bool, MeasDim, 1>;
+
+  HealthMonitor() = default;
+  // From validated settings: the χ² and normal quantiles are computed here, once.
+  explicit HealthMonitor(const HealthSettings<Scalar>& settings) : settings_(settings) {
+    const double alpha = double(settings.falseAlarmProbability);
+    const int fullDof = settings.window * MeasDim;
+    // Wilson–Hilferty, χ²_q(k) ≈ k (1 − c + z √c)³ with c = 2/(9k), with z fitted to the exact quantile
+    // at the block's full degrees of freedom: exact there, within a fraction of a percent for a block
+    // with missing components.
+    upperZ_ = Scalar(wilsonHilfertyZ(chiSquareQuantile(1 - alpha / 2, fullDof), fullDof));
+    lowerZ_ = Scalar(wilsonHilfertyZ(chiSquareQuantile(alpha / 2, fullDof), fullDof));
+    // |Z| ≤ z with probability 1 − α/m (Bonferroni over the components): z² is χ²(1)'s quantile.
+    autocorrelationBound_ = Scalar(std::sqrt(chiSquareQuantile(1 - alpha / MeasDim, 1)));
+    startBlock();
+  }
+
+  const HealthStatistics<Scalar>& statistics() const { return stats_; }
+  Health health() const { return stats_.latched; }
+
+  // Everything back to the start (reset()).
+  void clear() {
+    stats_ = HealthStatistics<Scalar>();
+    startBlock();
+    blockStarted_ = false;
+  }
+  // The latched alarm only (clearHealth()).
+  void clearAlarm() {
+    stats_.latched = Health::Ok;
+    stats_.alarmAtUpdate = 0;
+  }
+  // A new pass: the block under way is dropped, the alarms kept.
+  void restartBlock() {
+    startBlock();
+    blockStarted_ = false;
+  }
+
+  // Every public call's outcome: counts refusals in a row.
+  void observeStatus(Status status) {
+    if (!settings_.enabled) return;
+    if (taken(status)) {
+      stats_.refusalsInARow = 0;
+      return;
+    }
+    if (++stats_.refusalsInARow >= settings_.refusalStreak) raise(Health::RepeatedRefusals);
+  }
+
+  // A committed measurement update: its innovation ν, the diagonal of P_yy and its NIS over the
+  // components present (`present` null: all). `parameters` and `parameterSigma` (negative: none) are
+  // the estimate after the update, for the parameter tests at the block's end.
+  template <class InnovationCovariance>
+  void observeUpdate(const Meas& innovation, const InnovationCovariance& innovationCovariance, Scalar nis,
+                     const Mask* present, const Param& parameters, const Param& parameterSigma,
+                     const Param& lowerBound, const Param& upperBound) {
+    if (!settings_.enabled) return;
+    if (!blockStarted_) {
+      blockStartParameters_ = parameters;
+      blockStartSigma_ = parameterSigma;
+      blockStarted_ = true;
+    }
+    ++stats_.updates;
+    nisSum_ += nis;
+    for (int i = 0; i < MeasDim; ++i) {
+      const bool here = present == nullptr || (*present)(i);
+      if (!here) {
+        previousPresent_(i) = false;
+        continue;
+      }
+      ++dof_;
+      using std::sqrt;
+      const Scalar normalised = innovation(i) / sqrt(innovationCovariance(i, i));
+      squares_(i) += normalised * normalised;
+      ++count_(i);
+      if (previousPresent_(i)) lagProducts_(i) += normalised * previous_(i);
+      previous_(i) = normalised;
+      previousPresent_(i) = true;
+    }
+    if (++updatesInBlock_ < settings_.window) return;
+    testBlock(parameters, lowerBound, upperBound);
+    startBlock();
+    blockStartParameters_ = parameters;
+    blockStartSigma_ = parameterSigma;
+  }
+
+ private:
+  static double wilsonHilfertyZ(double quantile, int dof) {
+    const double c = 2.0 / (9.0 * dof);
+    return (std::cbrt(quantile / dof) - 1 + c) / std::sqrt(c);
+  }
+  Scalar wilsonHilferty(Scalar z, int dof) const {
+    const Scalar c = Scalar(2) / Scalar(9 * dof);
+    const Scalar root = Scalar(1) - c + z * std::sqrt(c);
+    return Scalar(dof) * root * root * root;
+  }
+
+  void testBlock(const Param& parameters, const Param& lowerBound, const Param& upperBound) {
+    ++stats_.blocks;
+    Health verdict = Health::Ok;
+    // Innovation consistency: the block's NIS sum against χ²(dof) at both tails.
+    if (dof_ > 0) {
+      const Scalar upper = wilsonHilferty(upperZ_, dof_), lower = wilsonHilferty(lowerZ_, dof_);
+      stats_.normalisedNis = nisSum_ / Scalar(dof_);
+      stats_.nisUpperBound = upper / Scalar(dof_);
+      stats_.nisLowerBound = lower / Scalar(dof_);
+      if (!(nisSum_ <= upper)) verdict = Health::InnovationsTooLarge;  // NaN fails too
+      else if (nisSum_ < lower) verdict = Health::InnovationsTooSmall;
+    }
+    // Whiteness: √N r₁ per component, r₁ = Σ eₖ eₖ₋₁ / Σ eₖ².
+    Scalar worst = 0;
+    for (int i = 0; i < MeasDim; ++i) {
+      if (count_(i) < 2 || !(squares_(i) > 0)) continue;
+      using std::abs, std::sqrt;
+      const Scalar score = abs(lagProducts_(i) / squares_(i)) * sqrt(Scalar(count_(i)));
+      if (score > worst) worst = score;
+    }
+    stats_.autocorrelationScore = worst;
+    stats_.autocorrelationBound = autocorrelationBound_;
+    if (verdict == Health::Ok && worst > autocorrelationBound_) verdict = Health::InnovationsCorrelated;
+    // Parameters: motion in the block's starting σ, and the bounds.
+    Scalar motion = 0;
+    for (int j = 0; j < ParamDim; ++j) {
+      if (!(blockStartSigma_(j) > 0)) continue;
+      using std::abs;
+      const Scalar sigmas = abs(parameters(j) - blockStartParameters_(j)) / blockStartSigma_(j);
+      if (!(sigmas <= motion)) motion = sigmas;  // NaN propagates as an alarm below
+    }
+    stats_.parameterMotionSigmas = motion;
+    if (verdict == Health::Ok && !(motion <= settings_.runawaySigmas)) verdict = Health::ParameterRunaway;
+    if (verdict == Health::Ok) {
+      for (int j = 0; j < ParamDim; ++j) {
+        const bool bounded = lowerBound(j) > -std::numeric_limits<Scalar>::infinity() ||
+                             upperBound(j) < std::numeric_limits<Scalar>::infinity();
+        if (bounded && (parameters(j) <= lowerBound(j) || parameters(j) >= upperBound(j)))
+          verdict = Health::ParameterAtBound;
+      }
+    }
+    stats_.lastBlock = verdict;
+    if (verdict != Health::Ok) {
+      ++stats_.alarmedBlocks;
+      raise(verdict);
+    }
+  }
+
+  void raise(Health alarm) {
+    if (stats_.latched != Health::Ok) return;
+    stats_.latched = alarm;
+    stats_.alarmAtUpdate = stats_.updates;
+  }
+
+  void startBlock() {
+    updatesInBlock_ = 0;
+    dof_ = 0;
+    nisSum_ = 0;
+    squares_.setZero();
+    lagProducts_.setZero();
+    count_.setZero();
+    previous_.setZero();
+    previousPresent_.setConstant(false);
+  }
+
+  HealthSettings<Scalar> settings_;
+  HealthStatistics<Scalar> stats_;
+  Scalar upperZ_ = 0, lowerZ_ = 0, autocorrelationBound_ = 0;
+  // The block under way.
+  int updatesInBlock_ = 0, dof_ = 0;
+  Scalar nisSum_ = 0;
+  Meas squares_ = Meas::Zero(), lagProducts_ = Meas::Zero(), previous_ = Meas::Zero();
+  Eigen::Matrix<int, MeasDim, 1> count_ = Eigen::Matrix<int, MeasDim, 1>::Zero();
+  Mask previousPresent_ = Mask::Constant(false);
+  bool blockStarted_ = false;
+  Param blockStartParameters_ = Param::Zero(), blockStartSigma_ = Param::Constant(Scalar(-1));
+};
+
+}  // namespace detail
+/// \endcond
+}  // namespace mjukf
