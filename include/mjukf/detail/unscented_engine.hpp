@@ -817,8 +817,8 @@ constexpr Status combineTaken(Status a, Status b) { return a == Status::Ok ? b :
 template <class Filter, class = void>
 constexpr bool hasParameterCovariance = false;
 template <class Filter>
-constexpr bool hasParameterCovariance<Filter, std::void_t<decltype(std::declval<const Filter&>().parameterCovariance())>> =
-    true;
+constexpr bool
+    hasParameterCovariance<Filter, std::void_t<decltype(std::declval<const Filter&>().parameterCovariance())>> = true;
 template <class Settings, class = void>
 constexpr bool hasParameterBounds = false;
 template <class Settings>

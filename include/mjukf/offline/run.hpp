@@ -182,8 +182,7 @@ void runSample(Filter& filter, const DataSet<typename Filter::Model>& data, long
   sample.state = filter.state();
   sample.parameters = filter.parameters();
   sample.covariance = filter.covariance();
-  if constexpr (detail::hasParameterCovariance<Filter>)
-    sample.parameterCovariance = filter.parameterCovariance();
+  if constexpr (detail::hasParameterCovariance<Filter>) sample.parameterCovariance = filter.parameterCovariance();
   sample.diagnostics = filter.lastUpdate();
 }
 
