@@ -21,8 +21,8 @@ enum class OversizedStep {
 ///
 /// The mean x̂ is propagated over the call twice: with the step h as given, and with steps of h/2.
 /// The difference e = Φ_h(x̂) − Φ_{h/2}∘Φ_{h/2}(x̂) is the step doubling estimate of the integration
-/// error (2ᵖ − 1 times the error of the half steps for a method of order p: 3 for I-TR-BDF2, 15 for
-/// RK4). The step fails when, for any component i,
+/// error (2ᵖ − 1 times the error of the half steps for a method of order p: 1 for I-TR-BDF2, first
+/// order as used here (docs/integrators.md), 15 for RK4). The step fails when, for any component i,
 ///
 ///     |eᵢ| > tolerance · (|Δᵢ| + σᵢ),    Δ = Φ_{h/2}∘Φ_{h/2}(x̂) − x̂,  σᵢ = √Pᵢᵢ,
 ///
