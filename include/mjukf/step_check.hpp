@@ -19,12 +19,16 @@ enum class OversizedStep {
 /// The check of the integration step of a continuous-time model, run by `timeUpdate` and
 /// `propagateMean` (a discrete-time model has no integration step and is never checked).
 ///
-/// The mean x̂ is propagated over the call twice: with the step h as given, and with steps of h/2.
-/// The difference e = Φ_h(x̂) − Φ_{h/2}∘Φ_{h/2}(x̂) is the step doubling estimate of the integration
-/// error (2ᵖ − 1 times the error of the half steps for a method of order p: 3 for I-TR-BDF2, 15 for
-/// RK4). The step fails when, for any component i,
+/// The point x = x̂ + σ (the mean moved by one standard deviation σᵢ = √Pᵢᵢ in every component, so that
+/// a step unstable for the sigma points is seen where the mean itself does not move, at an equilibrium)
+/// is propagated over the call twice, with the input held at its value at the call's start (so that a
+/// jump of the model's `input(t)` inside the step does not count as integration error): with the step
+/// h as given, and with steps of h/2.
+/// The difference e = Φ_h(x) − Φ_{h/2}∘Φ_{h/2}(x) is the step doubling estimate of the integration
+/// error (2ᵖ − 1 times the error of the half steps for a method of order p: 1 for I-TR-BDF2, first
+/// order as used here (docs/integrators.md), 15 for RK4). The step fails when, for any component i,
 ///
-///     |eᵢ| > tolerance · (|Δᵢ| + σᵢ),    Δ = Φ_{h/2}∘Φ_{h/2}(x̂) − x̂,  σᵢ = √Pᵢᵢ,
+///     |eᵢ| > tolerance · (|Δᵢ| + σᵢ),    Δ = Φ_{h/2}∘Φ_{h/2}(x) − x,
 ///
 /// that is when the error is not small against both what the step moves the estimate and what the
 /// filter does not know about it. Both are scale-free: no unit of the state enters the test. A step
@@ -40,12 +44,16 @@ template <class Scalar>
 struct StepCheck {
   /// What an oversized step does: refused by default.
   OversizedStep onOversized = OversizedStep::Refuse;
-  /// The allowed step doubling difference, relative to |Δᵢ| + σᵢ; > 0.
-  Scalar tolerance = Scalar(0.1);
+  /// The allowed step doubling difference, relative to |Δᵢ| + σᵢ; > 0. The default refuses a step whose
+  /// error estimate is half of what it moves the estimate or more: an unstable or grossly unresolved
+  /// step, not a merely inaccurate one (a smaller tolerance asks for accuracy too).
+  Scalar tolerance = Scalar(0.5);
   /// A step unchanged since the last check is checked again every `interval` calls; ≥ 1.
   int interval = 16;
-  /// With `Subdivide`: the largest number of halvings (the step becomes h / 2^maxHalvings) before the
-  /// call is refused with `StepTooLarge` after all; in [0, 20].
+  /// With `Subdivide`: the largest number of halvings checked (the step becomes at most h / 2^(maxHalvings
+  /// − 1)) before the call is refused with `StepTooLarge` after all; in [0, 20]. A subdivided step is
+  /// taken only when the next halving passes the check too: far outside the stability region two
+  /// levels of step doubling can agree by coincidence.
   int maxHalvings = 10;
 };
 

@@ -1072,18 +1072,34 @@ class UnscentedEngine {
       }
       const Scalar requestedSize = h;
       const int requestedCount = steps;
-      const Vector& mean = estimate_.mean();
-      Vector full = policy_.propagateMean(Step<InputSource>{model_, integrator_, settings_, input, t, h, steps}, mean);
+      // The mean moved by one standard deviation in every component: where the mean itself does not
+      // move (an equilibrium) a step can still be unstable for the sigma points around it.
+      const Vector point = estimate_.mean() + estimate_.covariance().diagonal().cwiseMax(Scalar(0)).cwiseSqrt();
+      // The input held at its value at t: a jump of the model's input(t) inside the step would make the
+      // full and the half steps differ at any h, which is not what the check measures.
+      const Input start = input(t);
+      const HeldInput<Model> held{start};
+      Vector full =
+          policy_.propagateMean(Step<HeldInput<Model>>{model_, integrator_, settings_, held, t, h, steps}, point);
+      // Step doubling is an estimate: far outside the stability region two levels can agree by
+      // coincidence. So a subdivided step is taken only when the next halving passes too.
+      bool candidate = false;  // the level before this one passed (and was a subdivision)
       for (int halvings = 0;; ++halvings) {
-        const Vector halves =
-            policy_.propagateMean(Step<InputSource>{model_, integrator_, settings_, input, t, h / 2, 2 * steps}, mean);
-        if (stepErrorWithinTolerance(full, halves, mean, check.tolerance)) {
+        const Vector halves = policy_.propagateMean(
+            Step<HeldInput<Model>>{model_, integrator_, settings_, held, t, h / 2, 2 * steps}, point);
+        const bool passed = stepErrorWithinTolerance(full, halves, point, check.tolerance);
+        if (passed && (halvings == 0 || candidate)) {
+          if (candidate) {  // the level before this one: the check's h was halved once more since
+            h *= 2;
+            steps /= 2;
+          }
           checkedStepSize_ = requestedSize;
           checkedStepCount_ = requestedCount;
-          checkedHalvings_ = halvings;
+          checkedHalvings_ = candidate ? halvings - 1 : 0;
           callsSinceStepCheck_ = 0;
           return Status::Ok;
         }
+        candidate = passed;
         if (check.onOversized != OversizedStep::Subdivide || halvings == check.maxHalvings ||
             steps > std::numeric_limits<int>::max() / 4)
           return Status::StepTooLarge;
@@ -1095,12 +1111,12 @@ class UnscentedEngine {
   }
 
   // |eᵢ| ≤ tolerance (|Δᵢ| + σᵢ) for every component (step_check.hpp); false on NaN.
-  bool stepErrorWithinTolerance(const Vector& full, const Vector& halves, const Vector& mean, Scalar tolerance) const {
+  bool stepErrorWithinTolerance(const Vector& full, const Vector& halves, const Vector& start, Scalar tolerance) const {
     using std::abs, std::sqrt;
     const Matrix& covariance = estimate_.covariance();
     for (int i = 0; i < L; ++i) {
       const Scalar error = abs(full(i) - halves(i));
-      const Scalar scale = abs(halves(i) - mean(i)) + sqrt(covariance(i, i) > 0 ? covariance(i, i) : Scalar(0));
+      const Scalar scale = abs(halves(i) - start(i)) + sqrt(covariance(i, i) > 0 ? covariance(i, i) : Scalar(0));
       if (!(error <= tolerance * scale)) return false;
     }
     return true;
