@@ -54,8 +54,7 @@ TEST(HealthMonitor, TheBoundsAreTheChiSquareQuantilesOfTheBlock) {
   const double alpha = 1e-6;  // the default
   EXPECT_NEAR(monitor.statistics().nisUpperBound * 100, mjukf::chiSquareQuantile(1 - alpha / 2, 100), 1e-6);
   EXPECT_NEAR(monitor.statistics().nisLowerBound * 100, mjukf::chiSquareQuantile(alpha / 2, 100), 1e-6);
-  EXPECT_NEAR(std::pow(monitor.statistics().autocorrelationBound, 2), mjukf::chiSquareQuantile(1 - alpha / 2, 1),
-              1e-9);
+  EXPECT_NEAR(std::pow(monitor.statistics().autocorrelationBound, 2), mjukf::chiSquareQuantile(1 - alpha / 2, 1), 1e-9);
 }
 
 TEST(HealthMonitor, EachInnovationTestRaisesItsAlarm) {
@@ -239,7 +238,8 @@ TEST(FilterHealth, FloatFiltersRunTheSameTests) {
   mjukf::detail::HealthMonitor<float, 1, 1> monitor(settings);
   const Eigen::Matrix<float, 1, 1> covariance = Eigen::Matrix<float, 1, 1>::Identity();
   const Eigen::Matrix<float, 1, 1> none = Eigen::Matrix<float, 1, 1>::Constant(-1);
-  const Eigen::Matrix<float, 1, 1> lower = Eigen::Matrix<float, 1, 1>::Constant(-std::numeric_limits<float>::infinity());
+  const Eigen::Matrix<float, 1, 1> lower =
+      Eigen::Matrix<float, 1, 1>::Constant(-std::numeric_limits<float>::infinity());
   for (int k = 0; k < 50; ++k)
     monitor.observeUpdate(Eigen::Matrix<float, 1, 1>(3.0f), covariance, 9.0f, nullptr, none, none, lower, -lower);
   EXPECT_EQ(monitor.health(), Health::InnovationsTooLarge);

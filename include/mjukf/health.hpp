@@ -175,8 +175,8 @@ class HealthMonitor {
   // the estimate after the update, for the parameter tests at the block's end.
   template <class InnovationCovariance>
   void observeUpdate(const Meas& innovation, const InnovationCovariance& innovationCovariance, Scalar nis,
-                     const Mask* present, const Param& parameters, const Param& parameterSigma,
-                     const Param& lowerBound, const Param& upperBound) {
+                     const Mask* present, const Param& parameters, const Param& parameterSigma, const Param& lowerBound,
+                     const Param& upperBound) {
     if (!settings_.enabled) return;
     if (!blockStarted_) {
       blockStartParameters_ = parameters;
@@ -227,8 +227,10 @@ class HealthMonitor {
       stats_.normalisedNis = nisSum_ / Scalar(dof_);
       stats_.nisUpperBound = upper / Scalar(dof_);
       stats_.nisLowerBound = lower / Scalar(dof_);
-      if (!(nisSum_ <= upper)) verdict = Health::InnovationsTooLarge;  // NaN fails too
-      else if (nisSum_ < lower) verdict = Health::InnovationsTooSmall;
+      if (!(nisSum_ <= upper))
+        verdict = Health::InnovationsTooLarge;  // NaN fails too
+      else if (nisSum_ < lower)
+        verdict = Health::InnovationsTooSmall;
     }
     // Whiteness: √N r₁ per component, r₁ = Σ eₖ eₖ₋₁ / Σ eₖ².
     Scalar worst = 0;
