@@ -71,8 +71,8 @@ TEST(Gallery, ShortStudyOfEachPlant) {
       EXPECT_NE(r.output.find(filter), std::string::npos) << plant.slug << "\n" << r.output;
     const auto rows = readCsv(dir + "/" + plant.slug + "_study.csv");
     ASSERT_EQ(rows.size(), 1u + 2 * 3) << plant.slug;
-    // seed, filter, scenario; 2 RMSEs; 5; 2 finals; the final NEES of θ̂
-    ASSERT_EQ(rows[0].size(), 3u + 2 + 5 + 2 + 1) << plant.slug;
+    // seed, filter, scenario; 2 RMSEs; 5; 2 finals; the final NEES of θ̂; the health at the end
+    ASSERT_EQ(rows[0].size(), 3u + 2 + 5 + 2 + 1 + 1) << plant.slug;
     EXPECT_EQ(rows[1][0] + "," + rows[1][1], "1,jukf") << plant.slug;
     EXPECT_EQ(rows[1][5], "0") << plant.slug << ": JUKF diverged on seed 1";
     EXPECT_EQ(rows[1][6], "ok") << plant.slug;

@@ -172,6 +172,24 @@ FilterSetup<Experiment> filterSetup(const Arguments& args) {
   return setup;
 }
 
+// The filter's health at the end of a run (docs/robustness.md, "The health monitor"): the latched
+// alarm, where it was raised and how many blocks raised one, and the last complete block's statistics.
+template <class Model>
+void printHealth(const EstimateRun<Model>& run) {
+  const auto& h = run.healthStatistics;
+  if (run.health == Health::Ok)
+    std::printf("health: ok (no alarm in %ld blocks of measurement updates)\n", h.blocks);
+  else
+    std::printf("health: %s (first raised at measurement update %ld; %ld of %ld blocks raised an alarm)\n",
+                toString(run.health), h.alarmAtUpdate, h.alarmedBlocks, h.blocks);
+  if (h.blocks > 0)
+    std::printf(
+        "health, last block: normalised NIS %.4g (bounds %.3g, %.3g), lag-one autocorrelation %.3g (bound %.3g), "
+        "parameter motion %.3g sigma\n",
+        double(h.normalisedNis), double(h.nisLowerBound), double(h.nisUpperBound), double(h.autocorrelationScore),
+        double(h.autocorrelationBound), double(h.parameterMotionSigmas));
+}
+
 }  // namespace detail
 
 /// estimate --filter ukf|jukf|mjukf|dual --data FILE --out FILE [--xi X] [--ordering O] [--every N] [more settings]
@@ -226,6 +244,7 @@ int estimateCommand(const std::vector<std::string>& words) {
                 data.parameterTruth.back()(i),
                 setup.kind == FilterKind::Ukf ? " (fixed: ukf estimates no parameters)" : "");
   std::printf("loop_seconds: %.6g\n", run.loopSeconds);
+  detail::printHealth(run);
   std::printf("wrote %s\n", out.c_str());
   return kExitOk;
 }

@@ -14,6 +14,7 @@
 #include "common/experiment.hpp"
 #include "common/plant_data.hpp"
 #include "mjukf/dual_ukf.hpp"
+#include "mjukf/health.hpp"
 #include "mjukf/joint_ukf.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
 #include "mjukf/ukf.hpp"
@@ -67,6 +68,10 @@ struct EstimateRun {
   /// The filter's own covariance of θ̂ at the end (JUKF's θ block, the dual's P^θ); empty for a filter
   /// that reports none.
   std::optional<Eigen::Matrix<typename Model::Scalar, Model::ParamDim, Model::ParamDim>> finalParameterCovariance;
+  /// The filter's health at the end of the run (its latched alarm, or Ok) and the statistics behind it
+  /// (health.hpp; docs/robustness.md, "The health monitor").
+  Health health = Health::Ok;
+  HealthStatistics<typename Model::Scalar> healthStatistics;
 };
 
 namespace detail {
@@ -107,6 +112,8 @@ EstimateRun<Model> runSchedule(Filter& filter, const PlantData<Model>& data, int
       });
   run.loopSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   run.finalParameterCovariance = parameterCovarianceOf(filter);
+  run.health = filter.health();
+  run.healthStatistics = filter.healthStatistics();
   if (run.outcome.status != Status::Ok) {  // keep only the rows that were estimated
     run.state.resize(static_cast<std::size_t>(run.outcome.row));
     run.parameters.resize(static_cast<std::size_t>(run.outcome.row));

@@ -173,6 +173,8 @@ struct StudyResult {
   /// (θ̂ − θ)ᵀ P_θ⁻¹ (θ̂ − θ) at the last row, with the filter's own P_θ; NaN for a filter that reports none.
   double nees = std::nan("");
   bool diverged = false;
+  /// The filter's health at the end of the run (health.hpp): its first alarm, or Ok.
+  Health health = Health::Ok;
   Status status = Status::Ok;
   long stoppedAtRow = 0;  ///< the refused row, or the last row when the run went through
   long repairs = 0;
@@ -356,6 +358,7 @@ int studyCommand(const std::vector<std::string>& words) {
             result.finalEstimate[std::size_t(i)] = run.parameters.empty() ? std::nan("") : run.parameters.back()(i);
           }
           result.diverged = detail::divergedRun(run, data, setup.initialParameters);
+          result.health = run.health;
           if (run.finalParameterCovariance && !run.parameters.empty() && run.outcome.status == Status::Ok) {
             const typename Model::Param error = run.parameters.back() - data.parameterTruth.back();
             const auto factor = run.finalParameterCovariance->llt();
@@ -383,7 +386,7 @@ int studyCommand(const std::vector<std::string>& words) {
   for (const auto& q : Plant::parameters) header.push_back(detail::rmseColumn(q));
   header.insert(header.end(), {"diverged", "status", "stopped_at_row", "repairs", "rejected"});
   for (const auto& q : Plant::parameters) header.push_back(std::string("final_") + q.name);
-  header.push_back("nees");
+  header.insert(header.end(), {"nees", "health"});
   const int divergedColumn = 4 + p;
   {
     CsvWriter csv(*csvFile, header);
@@ -395,7 +398,7 @@ int studyCommand(const std::vector<std::string>& words) {
         csv << double(result.diverged) << std::string(toString(result.status)) << double(result.stoppedAtRow)
             << double(result.repairs) << double(result.rejected);
         for (double v : result.finalEstimate) csv << v;
-        csv << result.nees;
+        csv << result.nees << std::string(toString(result.health));
         csv.endRow();
       }
     csv.close();
@@ -410,7 +413,8 @@ int studyCommand(const std::vector<std::string>& words) {
   say(format(
       "diverged: the filter refused a step, or a final estimate is not finite or off by more than %g x the larger",
       kDivergenceBound));
-  say("  of the truth and the first guess's error");
+  say("  of the truth and the first guess's error; alarm: the filter's health monitor raised an alarm in the run");
+  say("  (docs/robustness.md, \"The health monitor\"); unflagged: runs that diverged without one");
   Plotter plotter;
   for (std::size_t s = 0; s < scenarios.size(); ++s) {
     say("");
@@ -418,7 +422,7 @@ int studyCommand(const std::vector<std::string>& words) {
     std::string head = format("%-11s", "filter");
     for (const auto& q : Plant::parameters)
       head += format(" %-30s %-11s", ("RMSE " + std::string(q.name) + " mean +- sd").c_str(), "median");
-    say(head + " diverged  mean NEES of the final θ̂ [95 % band]");
+    say(head + " diverged alarm    unflagged   mean NEES of the final θ̂ [95 % band]");
     std::vector<bool> shown;  // whether the filter has a run that did not diverge, for the box plot
     for (std::size_t f = 0; f < filters.size(); ++f) {
       std::string line = format("%-11s", filters[f].name.c_str());
@@ -448,7 +452,15 @@ int studyCommand(const std::vector<std::string>& words) {
                                           : format("  %.3g [%.3g, %.3g]", detail::mean(nees),
                                                    detail::chiSquareQuantile(dof, -1.959964) / double(nees.size()),
                                                    detail::chiSquareQuantile(dof, 1.959964) / double(nees.size()));
-      say(line + format(" %ld/%zu", diverged, seeds.size()) + consistency);
+      long alarmed = 0, unflagged = 0;
+      for (std::size_t k = 0; k < seeds.size(); ++k) {
+        const auto& result = results[s * seeds.size() + k][f];
+        alarmed += result.health != Health::Ok;
+        unflagged += result.diverged && result.health == Health::Ok;
+      }
+      say(line + format(" %-8s %-8s %-10ld", format("%ld/%zu", diverged, seeds.size()).c_str(),
+                        format("%ld/%zu", alarmed, seeds.size()).c_str(), unflagged) +
+          consistency);
       shown.push_back(diverged < long(seeds.size()));
     }
     detail::drawStudyPlot<Plant>(plotter, outputs, path("study_" + scenarios[s].name + ".png"), csvPath,
