@@ -72,6 +72,24 @@ TEST_P(EstimateConformance, ReproducesTheConformanceRmse) {
   EXPECT_EQ(estimates.column("x1").front(), 0.0);
 }
 
+// The health at the end of a run (docs/robustness.md, "The health monitor"): the paper's R = 1e-7 on
+// the tank's 30 dB reference file (noise variance 0.09) raises InnovationsTooLarge in the first block;
+// R = 0.09 runs the whole file without an alarm.
+TEST(Estimate, PrintsTheHealthOfTheRun) {
+  const std::string data = kData + "/coupled_tank_reference.csv";
+  const std::string out = scratch("estimates.csv");
+  const Result paper = run(kTank + " estimate --filter jukf --data " + data + " --out " + out);
+  ASSERT_EQ(paper.exitCode, 0) << paper.output;
+  EXPECT_NE(
+      paper.output.find("\nhealth: innovations larger than their covariance (first raised at measurement update 50;"),
+      std::string::npos)
+      << paper.output;
+  EXPECT_NE(paper.output.find("\nhealth, last block: normalised NIS "), std::string::npos) << paper.output;
+  const Result noise = run(kTank + " estimate --filter jukf --r 0.09 --data " + data + " --out " + out);
+  ASSERT_EQ(noise.exitCode, 0) << noise.output;
+  EXPECT_NE(noise.output.find("\nhealth: ok (no alarm in 2000 blocks"), std::string::npos) << noise.output;
+}
+
 INSTANTIATE_TEST_SUITE_P(
     ReferenceFiles, EstimateConformance,
     ::testing::Values(

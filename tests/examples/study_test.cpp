@@ -82,8 +82,8 @@ TEST(Study, OffersMjukfAutomaticByDefault) {
   const std::string dir = scratch("out");
   const Result r = run(kVanDerPol + " study --seeds 1-2 --out-dir " + shellQuote(dir));
   ASSERT_EQ(r.exitCode, 0) << r.output;
-  EXPECT_TRUE(
-      std::regex_search(r.output, std::regex("\nmjukf-auto +([-0-9.e]+ \\+- [-0-9.e]+ +[-0-9.e]+|- +-) +[0-2]/2 +[0-2]/2 +[0-2] +-\n")))
+  EXPECT_TRUE(std::regex_search(
+      r.output, std::regex("\nmjukf-auto +([-0-9.e]+ \\+- [-0-9.e]+ +[-0-9.e]+|- +-) +[0-2]/2 +[0-2]/2 +[0-2] +-\n")))
       << r.output;
   EXPECT_NE(run(kVanDerPol + " --help").output.find("mjukf-auto"), std::string::npos);
 }
@@ -95,9 +95,12 @@ TEST(Study, PrintsTheTableAndWritesItsFiles) {
   const Result r = run(kTank + " study --seeds 1-3 --jobs 2 --duration 5 --out-dir " + shellQuote(dir));
   ASSERT_EQ(r.exitCode, 0) << r.output;
   EXPECT_TRUE(std::regex_search(
-      r.output, std::regex("\njukf +[-0-9.e]+ \\+- [-0-9.e]+ +[-0-9.e]+ +0/3 +[0-3]/3 +0 +[-0-9.e]+ \\[[-0-9.e]+, [-0-9.e]+\\]\n")))
+      r.output,
+      std::regex(
+          "\njukf +[-0-9.e]+ \\+- [-0-9.e]+ +[-0-9.e]+ +0/3 +[0-3]/3 +0 +[-0-9.e]+ \\[[-0-9.e]+, [-0-9.e]+\\]\n")))
       << r.output;
-  EXPECT_TRUE(std::regex_search(r.output, std::regex("\nmjukf +[-0-9.e]+ \\+- [-0-9.e]+ +[-0-9.e]+ +0/3 +[0-3]/3 +0 +-\n")))
+  EXPECT_TRUE(
+      std::regex_search(r.output, std::regex("\nmjukf +[-0-9.e]+ \\+- [-0-9.e]+ +[-0-9.e]+ +0/3 +[0-3]/3 +0 +-\n")))
       << r.output;
   EXPECT_TRUE(std::filesystem::exists(dir + "/coupled_tank_study.csv"));
   EXPECT_TRUE(std::filesystem::exists(dir + "/coupled_tank_study_table.txt"));

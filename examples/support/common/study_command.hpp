@@ -458,8 +458,9 @@ int studyCommand(const std::vector<std::string>& words) {
         alarmed += result.health != Health::Ok;
         unflagged += result.diverged && result.health == Health::Ok;
       }
-      say(line + format(" %-8s %-8s %-10ld", format("%ld/%zu", diverged, seeds.size()).c_str(),
-                        format("%ld/%zu", alarmed, seeds.size()).c_str(), unflagged) +
+      say(line +
+          format(" %-8s %-8s %-10ld", format("%ld/%zu", diverged, seeds.size()).c_str(),
+                 format("%ld/%zu", alarmed, seeds.size()).c_str(), unflagged) +
           consistency);
       shown.push_back(diverged < long(seeds.size()));
     }
