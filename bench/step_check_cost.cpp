@@ -2,7 +2,7 @@
 // of the step benchmarks (step_cases.hpp): the tank's UKF with the paper's settings, a time update over
 // one integrator step (h = 1 ms, I-TR-BDF2) followed by a measurement update, on simulated
 // measurements. Three copies of it differ only in `stepCheck`:
-//   default: the library's default (Refuse, tolerance 0.1, a step unchanged is checked every 16 calls);
+//   default: the library's default (Refuse, tolerance 0.5, a step unchanged is checked every 16 calls);
 //   every:   the same with interval = 1, every call checked (the cost when h changes at every call);
 //   accept:  OversizedStep::Accept, no check (the filters before the check).
 // Each repetition runs kSteps steps of each copy from the same start, in an order that rotates from one

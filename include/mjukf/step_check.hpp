@@ -19,27 +19,28 @@ enum class OversizedStep {
 /// The check of the integration step of a continuous-time model, run by `timeUpdate` and
 /// `propagateMean` (a discrete-time model has no integration step and is never checked).
 ///
-/// The point x = x̂ + σ (the mean moved by one standard deviation σᵢ = √Pᵢᵢ in every component, so that
-/// a step unstable for the sigma points is seen where the mean itself does not move, at an equilibrium)
-/// is propagated over the call twice, with the input held at its value at the call's start (so that a
-/// jump of the model's `input(t)` inside the step does not count as integration error): with the step
-/// h as given, and with steps of h/2.
-/// The difference e = Φ_h(x) − Φ_{h/2}∘Φ_{h/2}(x) is the step doubling estimate of the integration
-/// error (2ᵖ − 1 times the error of the half steps for a method of order p: 1 for I-TR-BDF2, first
-/// order as used here (docs/integrators.md), 15 for RK4). The step fails when, for any component i,
+/// Step doubling on two points: the mean x̂, and x̂ + δ with a small offset δᵢ = max(σᵢ/100, √ε (|x̂ᵢ| + σᵢ))
+/// (σᵢ = √Pᵢᵢ) whose motion follows the dynamics linearised about the mean, so that a step unstable for
+/// the sigma points shows where the mean itself does not move, at an equilibrium. Each is propagated
+/// over the call with steps of h as given and with steps of h/2, the input held at its value at the
+/// call's start (a jump of the model's `input(t)` inside the step is not integration error). With
+/// e = Φ_h(x̂) − Φ_{h/2}∘Φ_{h/2}(x̂), the step doubling estimate of the integration error (2ᵖ − 1 times
+/// the error of the half steps for a method of order p: 1 for I-TR-BDF2, first order as used here
+/// (docs/integrators.md), 15 for RK4), and Δ = Φ_{h/2}∘Φ_{h/2}(x̂) − x̂, the step fails when for some i
 ///
-///     |eᵢ| > tolerance · (|Δᵢ| + σᵢ),    Δ = Φ_{h/2}∘Φ_{h/2}(x) − x,
+///     |eᵢ| > tolerance · (|Δᵢ| + σᵢ),   or the same of the offset's motion, with δᵢ in place of σᵢ,
 ///
 /// that is when the error is not small against both what the step moves the estimate and what the
 /// filter does not know about it. Both are scale-free: no unit of the state enters the test. A step
 /// inside the stability region of the stepper and resolving the dynamics passes with orders of
 /// magnitude to spare; a step of seconds given to a plant of milliseconds (or a unit mix-up, milliseconds
-/// passed as seconds) fails by orders of magnitude.
+/// passed as seconds) fails by orders of magnitude. NaN or ±Inf from the half steps is the model's
+/// fault and refused as `NonFiniteResult`.
 ///
-/// Cost: three propagations of the mean over the call (h, and two of h/2), against 2L + 1 of sigma
+/// Cost: six propagations of the mean (two points, over h and twice over h/2), against 2L + 1 of sigma
 /// points for the call itself. So the check runs on the first time update, whenever the step (h or
 /// the step count) differs from the last one checked, and on every `interval`-th call in between,
-/// which keeps its mean cost at 3/interval propagations per call. Every field: docs/settings.md §2.
+/// which keeps its mean cost at 6/interval propagations per call. Every field: docs/settings.md §2.
 template <class Scalar>
 struct StepCheck {
   /// What an oversized step does: refused by default.

@@ -1072,22 +1072,34 @@ class UnscentedEngine {
       }
       const Scalar requestedSize = h;
       const int requestedCount = steps;
-      // The mean moved by one standard deviation in every component: where the mean itself does not
-      // move (an equilibrium) a step can still be unstable for the sigma points around it.
-      const Vector point = estimate_.mean() + estimate_.covariance().diagonal().cwiseMax(Scalar(0)).cwiseSqrt();
       // The input held at its value at t: a jump of the model's input(t) inside the step would make the
       // full and the half steps differ at any h, which is not what the check measures.
       const Input start = input(t);
       const HeldInput<Model> held{start};
-      Vector full =
-          policy_.propagateMean(Step<HeldInput<Model>>{model_, integrator_, settings_, held, t, h, steps}, point);
+      // The mean, and the mean with a small offset (a hundredth of σ, at least √ε of its size) whose
+      // motion follows the dynamics linearised about the mean: where the mean does not move (an
+      // equilibrium), a step unstable for the sigma points around it shows in the offset's growth.
+      const Vector& mean = estimate_.mean();
+      const Vector sigma = estimate_.covariance().diagonal().cwiseMax(Scalar(0)).cwiseSqrt();
+      using std::sqrt;
+      const Scalar rootEpsilon = sqrt(std::numeric_limits<Scalar>::epsilon());
+      const Vector offset = (Scalar(0.01) * sigma).cwiseMax(rootEpsilon * (mean.cwiseAbs() + sigma));
+      const Vector perturbed = mean + offset;
+      StepDoubling doubling{mean, perturbed, mean, perturbed};
+      const auto propagateBoth = [&](Scalar size, int count, Vector& ofMean, Vector& ofPerturbed) {
+        const Step<HeldInput<Model>> step{model_, integrator_, settings_, held, t, size, count};
+        ofMean = policy_.propagateMean(step, mean);
+        ofPerturbed = policy_.propagateMean(step, perturbed);
+      };
+      propagateBoth(h, steps, doubling.full, doubling.fullPerturbed);
       // Step doubling is an estimate: far outside the stability region two levels can agree by
       // coincidence. So a subdivided step is taken only when the next halving passes too.
       bool candidate = false;  // the level before this one passed (and was a subdivision)
       for (int halvings = 0;; ++halvings) {
-        const Vector halves = policy_.propagateMean(
-            Step<HeldInput<Model>>{model_, integrator_, settings_, held, t, h / 2, 2 * steps}, point);
-        const bool passed = stepErrorWithinTolerance(full, halves, point, check.tolerance);
+        propagateBoth(h / 2, 2 * steps, doubling.halves, doubling.halvesPerturbed);
+        // The model's own fault (NaN or ±Inf even from the smaller steps), not the step's size.
+        if (!allFinite(doubling.halves) || !allFinite(doubling.halvesPerturbed)) return Status::NonFiniteResult;
+        const bool passed = doubling.passes(mean, offset, sigma, check.tolerance);
         if (passed && (halvings == 0 || candidate)) {
           if (candidate) {  // the level before this one: the check's h was halved once more since
             h *= 2;
@@ -1105,22 +1117,32 @@ class UnscentedEngine {
           return Status::StepTooLarge;
         h /= 2;
         steps *= 2;
-        full = halves;
+        doubling.full = doubling.halves;
+        doubling.fullPerturbed = doubling.halvesPerturbed;
       }
     }
   }
 
-  // |eᵢ| ≤ tolerance (|Δᵢ| + σᵢ) for every component (step_check.hpp); false on NaN.
-  bool stepErrorWithinTolerance(const Vector& full, const Vector& halves, const Vector& start, Scalar tolerance) const {
-    using std::abs, std::sqrt;
-    const Matrix& covariance = estimate_.covariance();
-    for (int i = 0; i < L; ++i) {
-      const Scalar error = abs(full(i) - halves(i));
-      const Scalar scale = abs(halves(i) - start(i)) + sqrt(covariance(i, i) > 0 ? covariance(i, i) : Scalar(0));
-      if (!(error <= tolerance * scale)) return false;
+  // One level of the step check: the mean and the perturbed mean over the call's steps of h (full) and
+  // of h/2 (halves).
+  struct StepDoubling {
+    Vector full, fullPerturbed, halves, halvesPerturbed;
+
+    // For every component i (step_check.hpp), with e the difference between the two propagations and Δ
+    // the half steps' move: |eᵢ| ≤ tolerance (|Δᵢ| + σᵢ) for the mean, and the same for the offset's
+    // motion with the offset in place of σ. False on NaN or ±Inf.
+    bool passes(const Vector& mean, const Vector& offset, const Vector& sigma, Scalar tolerance) const {
+      using std::abs;
+      for (int i = 0; i < L; ++i) {
+        const Scalar meanError = abs(full(i) - halves(i));
+        const Scalar meanScale = abs(halves(i) - mean(i)) + sigma(i);
+        const Scalar offsetError = abs((fullPerturbed(i) - full(i)) - (halvesPerturbed(i) - halves(i)));
+        const Scalar offsetScale = abs(halvesPerturbed(i) - halves(i)) + offset(i);
+        if (!(meanError <= tolerance * meanScale) || !(offsetError <= tolerance * offsetScale)) return false;
+      }
+      return true;
     }
-    return true;
-  }
+  };
 
   template <class InputSource>
   Status timeUpdateWith(const InputSource& input, Scalar t, Scalar h, int steps) {
