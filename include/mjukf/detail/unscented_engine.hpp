@@ -1065,7 +1065,8 @@ class UnscentedEngine {
       const StepCheck<Scalar>& check = settings_.stepCheck;
       if (check.onOversized == OversizedStep::Accept) return Status::Ok;
       const bool sameRequest = h == checkedStepSize_ && steps == checkedStepCount_;
-      if (sameRequest && ++callsSinceStepCheck_ < check.interval) {
+      if (sameRequest && callsSinceStepCheck_ + 1 < check.interval) {
+        pendingStepCheck_ = {checkedStepSize_, checkedStepCount_, checkedHalvings_, callsSinceStepCheck_ + 1};
         h /= Scalar(1 << checkedHalvings_);
         steps <<= checkedHalvings_;
         return Status::Ok;
@@ -1105,10 +1106,7 @@ class UnscentedEngine {
             h *= 2;
             steps /= 2;
           }
-          checkedStepSize_ = requestedSize;
-          checkedStepCount_ = requestedCount;
-          checkedHalvings_ = candidate ? halvings - 1 : 0;
-          callsSinceStepCheck_ = 0;
+          pendingStepCheck_ = {requestedSize, requestedCount, candidate ? halvings - 1 : 0, 0};
           return Status::Ok;
         }
         candidate = passed;
@@ -1137,7 +1135,9 @@ class UnscentedEngine {
         const Scalar meanError = abs(full(i) - halves(i));
         const Scalar meanScale = abs(halves(i) - mean(i)) + sigma(i);
         const Scalar offsetError = abs((fullPerturbed(i) - full(i)) - (halvesPerturbed(i) - halves(i)));
-        const Scalar offsetScale = abs(halvesPerturbed(i) - halves(i)) + offset(i);
+        // Plus the rounding of the two propagations, which the difference of two large values keeps.
+        const Scalar offsetScale = abs(halvesPerturbed(i) - halves(i)) + offset(i) +
+                                   Scalar(64) * std::numeric_limits<Scalar>::epsilon() * abs(halves(i));
         if (!(meanError <= tolerance * meanScale) || !(offsetError <= tolerance * offsetScale)) return false;
       }
       return true;
@@ -1166,6 +1166,7 @@ class UnscentedEngine {
     policy_.constrainMean(estimate_.candidateMean());
     estimate_.commitPrediction();
     policy_.commitPrediction();
+    commitStepCheck();
     time_ = t + step.interval();
     return combineTaken(settled, parameters);
   }
@@ -1200,6 +1201,7 @@ class UnscentedEngine {
     if (!allFinite(mean)) return Status::NonFiniteResult;
     estimate_.commitMean(mean);
     policy_.commitOpenLoop(step.interval());
+    commitStepCheck();
     time_ = t + step.interval();
     return Status::Ok;
   }
@@ -1293,6 +1295,22 @@ class UnscentedEngine {
   int checkedStepCount_ = 0;
   int checkedHalvings_ = 0;
   int callsSinceStepCheck_ = 0;
+  // What the check of the call under way found, committed with the call (a refused call changes nothing,
+  // the check's schedule included).
+  struct StepCheckRecord {
+    Scalar stepSize;
+    int stepCount, halvings, callsSinceCheck;
+  };
+  StepCheckRecord pendingStepCheck_{0, 0, 0, 0};
+  void commitStepCheck() {
+    if constexpr (!isDiscreteTime<Model>) {
+      if (settings_.stepCheck.onOversized == OversizedStep::Accept) return;
+      checkedStepSize_ = pendingStepCheck_.stepSize;
+      checkedStepCount_ = pendingStepCheck_.stepCount;
+      checkedHalvings_ = pendingStepCheck_.halvings;
+      callsSinceStepCheck_ = pendingStepCheck_.callsSinceCheck;
+    }
+  }
 
  private:
   // The input of a model without one (InputDim = 0): an empty vector, held over every step.
