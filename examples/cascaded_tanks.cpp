@@ -34,12 +34,12 @@ void printUsage(std::ostream& out) {
       << "  identify --data FILE --out-dir DIR\n"
       << "      JUKF, MJUKF (automatic) and the dual UKF, one rule for their settings; writes\n"
       << "      DIR/test_simulation.csv (t,u,y_measured,y_simulated: the JUKF's free run on the test set),\n"
-      << "      DIR/results.md (the test RMS of each beside the published ones) and DIR/test_simulation.png.\n"
+      << "      DIR/results.txt (the test RMS of each beside the published ones) and DIR/test_simulation.png.\n"
       << "  terms --data FILE [--out-dir DIR]\n"
       << "      The output-error fit of each model structure on the estimation set: what each term adds\n"
-      << "      (DIR/terms.md).\n"
+      << "      (DIR/terms.txt).\n"
       << "  sensitivity --data FILE [--out-dir DIR]\n"
-      << "      The JUKF's test RMS with each setting of the rule halved and doubled (DIR/sensitivity.md).\n"
+      << "      The JUKF's test RMS with each setting of the rule halved and doubled (DIR/sensitivity.txt).\n"
       << "\n"
       << "Output files are written under temporary names and put in place only when the whole run has\n"
       << "succeeded. exit codes: 0 ok; 1 the run failed (a file could not be written, gnuplot failed);\n"
@@ -91,21 +91,26 @@ int identifyCommand(const Arguments& args) {
   const TestResult referenceTest = testSimulation(model, reference.theta, b);
 
   std::string text = "# Cascaded Tanks: test RMS error (V)\n\n";
-  text += "Identified on the estimation set; on the test set a free run from uVal, its initial state from "
-          "yVal[0..4]; RMS over yVal[5..]. The rule: R = " + fixed(rule.measurementNoise, 4) + " V^2 (100 sigma^2, "
-          "sigma^2 = " + fixed(rule.sensorVariance, 6) + " from the data), Q = " + fixed(rule.levelNoise, 6) +
-          " V^2 per sample, " + std::to_string(rule.passes) + " passes (docs/real-data.md).\n\n";
+  text +=
+      "Identified on the estimation set; on the test set a free run from uVal, its initial state from "
+      "yVal[0..4]; RMS over yVal[5..]. The rule: R = " +
+      fixed(rule.measurementNoise, 4) +
+      " V^2 (100 sigma^2, "
+      "sigma^2 = " +
+      fixed(rule.sensorVariance, 6) + " from the data), Q = " + fixed(rule.levelNoise, 6) + " V^2 per sample, " +
+      std::to_string(rule.passes) + " passes (docs/real-data.md).\n\n";
   text += "| model | test RMS | estimation RMS | best pass | refused steps | parameters |\n|---|---|---|---|---|---|\n";
   for (const Row& row : rows)
-    text += std::string("| ") + row.name + " | " + fixed(row.test.rms) + " | " + fixed(row.identified.estimationRms) + " | " +
-            std::to_string(row.identified.bestPass + 1) + " | " + std::to_string(row.identified.refused) + " | " +
-            describe(model, row.identified.theta) + " |\n";
+    text += std::string("| ") + row.name + " | " + fixed(row.test.rms) + " | " + fixed(row.identified.estimationRms) +
+            " | " + std::to_string(row.identified.bestPass + 1) + " | " + std::to_string(row.identified.refused) +
+            " | " + describe(model, row.identified.theta) + " |\n";
   text += "| output-error fit of the same model (no filter) | " + fixed(referenceTest.rms) + " | " +
           fixed(reference.estimationRms) + " | | | " + describe(model, reference.theta) + " |\n";
-  text += "| published: best linear approximation | 0.757 | | | | |\n"
-          "| published: Volterra | 0.54 | | | | |\n"
-          "| published: PNLSS | 0.45 | | | | |\n"
-          "| published: NLSS2 | 0.343 | | | | |\n\n";
+  text +=
+      "| published: best linear approximation | 0.757 | | | | |\n"
+      "| published: Volterra | 0.54 | | | | |\n"
+      "| published: PNLSS | 0.45 | | | | |\n"
+      "| published: NLSS2 | 0.343 | | | | |\n\n";
   text += "JUKF test RMS: " + fixed(rows[0].test.rms, 4) + " V\n";
 
   Plotter plotter;
@@ -119,12 +124,14 @@ int identifyCommand(const Arguments& args) {
     }
     writer.close();
   }
-  writeReport(outputs, dir, "results.md", text);
+  writeReport(outputs, dir, "results.txt", text);
   Figure figure;
   figure.png = (std::filesystem::path(dir) / "test_simulation.png").string();
   figure.title = "Cascaded tanks, test set: JUKF model, free run (RMS " + fixed(rows[0].test.rms) + " V)";
   figure.rows = 2;
-  figure.panels = {{"lower tank level", "t (s)", "y (V)",
+  figure.panels = {{"lower tank level",
+                    "t (s)",
+                    "y (V)",
                     {{csv, 1, 3, "measured", "lines lw 1 lc rgb '#1f77b4'"},
                      {csv, 1, 4, "simulated", "lines lw 2 lc rgb '#d62728'"}}},
                    {"pump input", "t (s)", "u (V)", {{csv, 1, 2, "u", "lines lw 1 lc rgb '#2ca02c'"}}}};
@@ -136,9 +143,10 @@ int identifyCommand(const Arguments& args) {
 int termsCommand(const Arguments& args) {
   const Benchmark b = loadBenchmark(args.requiredText("--data"));
   const std::string dir = directory(args);
-  std::string text = "# Cascaded Tanks: what each term of the model adds\n\n"
-                     "Output-error fits on the estimation set (Levenberg-Marquardt, no filter); the test RMS as the "
-                     "benchmark scores it.\n\n| structure | parameters | estimation RMS (V) | test RMS (V) |\n|---|---|---|---|\n";
+  std::string text =
+      "# Cascaded Tanks: what each term of the model adds\n\n"
+      "Output-error fits on the estimation set (Levenberg-Marquardt, no filter); the test RMS as the "
+      "benchmark scores it.\n\n| structure | parameters | estimation RMS (V) | test RMS (V) |\n|---|---|---|---|\n";
   for (const Structure& structure : structures()) {
     Model model;
     model.terms = structure.terms;
@@ -147,7 +155,7 @@ int termsCommand(const Arguments& args) {
             " | " + fixed(testSimulation(model, fit.theta, b).rms) + " |\n";
   }
   OutputFiles outputs;
-  writeReport(outputs, dir, "terms.md", text);
+  writeReport(outputs, dir, "terms.txt", text);
   outputs.commit();
   return kExitOk;
 }
@@ -162,15 +170,16 @@ int sensitivityCommand(const Arguments& args) {
     const char* name;
     double RuleFactors::*factor;
   };
-  const Setting settings[] = {{"R (measurement noise)", &RuleFactors::measurementNoise},
-                              {"Q (level noise)", &RuleFactors::levelNoise},
-                              {"P0 of the parameters", &RuleFactors::parameterSpread},
-                              {"P0 of x1(0)", &RuleFactors::upperLevelSpread},
-                              {"bounds' width (log units)", &RuleFactors::boundWidth},
-                              {"passes", &RuleFactors::passes}};
-  std::string text = "# Cascaded Tanks: the rule's sensitivity\n\nThe JUKF's test RMS (V) with one setting of the "
-                     "rule halved or doubled; the rule itself: " + fixed(base) + ". Target: within 0.05 of it.\n\n"
-                     "| setting | halved | doubled | largest change | within 0.05 |\n|---|---|---|---|---|\n";
+  const Setting settings[] = {
+      {"R (measurement noise)", &RuleFactors::measurementNoise}, {"Q (level noise)", &RuleFactors::levelNoise},
+      {"P0 of the parameters", &RuleFactors::parameterSpread},   {"P0 of x1(0)", &RuleFactors::upperLevelSpread},
+      {"bounds' width (log units)", &RuleFactors::boundWidth},   {"passes", &RuleFactors::passes}};
+  std::string text =
+      "# Cascaded Tanks: the rule's sensitivity\n\nThe JUKF's test RMS (V) with one setting of the "
+      "rule halved or doubled; the rule itself: " +
+      fixed(base) +
+      ". Target: within 0.05 of it.\n\n"
+      "| setting | halved | doubled | largest change | within 0.05 |\n|---|---|---|---|---|\n";
   for (const Setting& setting : settings) {
     double rms[2];
     for (int i = 0; i < 2; ++i) {
@@ -183,7 +192,7 @@ int sensitivityCommand(const Arguments& args) {
             " | " + (change <= 0.05 ? "yes" : "**no**") + " |\n";
   }
   OutputFiles outputs;
-  writeReport(outputs, dir, "sensitivity.md", text);
+  writeReport(outputs, dir, "sensitivity.txt", text);
   outputs.commit();
   return kExitOk;
 }

@@ -37,10 +37,10 @@ TEST(CascadedTanks, IdentifyWritesTheTestSimulationAndItsScore) {
   const std::string dir = scratch("cascaded_tanks");
   const Result r = run(kProgram + " identify --data " + shellQuote(kData) + " --out-dir " + shellQuote(dir));
   ASSERT_EQ(r.exitCode, 0) << r.output;
-  for (const char* name : {"/results.md", "/test_simulation.csv"})
+  for (const char* name : {"/results.txt", "/test_simulation.csv"})
     EXPECT_TRUE(std::ifstream(dir + name).good()) << name;
   for (const char* filter : {"| JUKF |", "| MJUKF (automatic) |", "| dual UKF |", "| published: NLSS2 | 0.343"})
-    EXPECT_NE(readText(dir + "/results.md").find(filter), std::string::npos) << filter;
+    EXPECT_NE(readText(dir + "/results.txt").find(filter), std::string::npos) << filter;
 
   const std::vector<std::string> csv = lines(dir + "/test_simulation.csv");
   ASSERT_EQ(csv.size(), 1u + 1024u);
@@ -67,7 +67,8 @@ TEST(CascadedTanks, IdentifyWritesTheTestSimulationAndItsScore) {
 
 TEST(CascadedTanks, RefusesAMissingOrMalformedFile) {
   const std::string dir = scratch("cascaded_tanks_bad");
-  const Result missing = run(kProgram + " identify --data " + shellQuote(dir + "/none.csv") + " --out-dir " + shellQuote(dir));
+  const Result missing =
+      run(kProgram + " identify --data " + shellQuote(dir + "/none.csv") + " --out-dir " + shellQuote(dir));
   EXPECT_EQ(missing.exitCode, 2) << missing.output;
   EXPECT_NE(missing.output.find("none.csv"), std::string::npos) << missing.output;
 

@@ -41,7 +41,8 @@ inline Benchmark loadBenchmark(const std::string& path) {
   if (table.rows() < 10) throw examples::CsvError(path, table.line(0), "fewer than 10 samples");
   for (const Series* s : {&b.uEst, &b.yEst, &b.uVal, &b.yVal})
     for (std::size_t k = 0; k < s->size(); ++k)
-      if (std::isnan((*s)[k])) throw examples::CsvError(path, table.line(k), "a missing sample in uEst, uVal, yEst or yVal");
+      if (std::isnan((*s)[k]))
+        throw examples::CsvError(path, table.line(k), "a missing sample in uEst, uVal, yEst or yVal");
   if (!(b.samplePeriod > 0) || !std::isfinite(b.samplePeriod))
     throw examples::CsvError(path, table.line(0), "Ts (first row) must be a sampling period > 0");
   return b;
@@ -62,7 +63,8 @@ inline Series simulate(const Model& model, const Param& theta, const Series& u, 
 
 inline double rmsError(const Series& measured, const Series& simulated, std::size_t first) {
   double sum = 0;
-  for (std::size_t k = first; k < measured.size(); ++k) sum += (measured[k] - simulated[k]) * (measured[k] - simulated[k]);
+  for (std::size_t k = first; k < measured.size(); ++k)
+    sum += (measured[k] - simulated[k]) * (measured[k] - simulated[k]);
   return std::sqrt(sum / double(measured.size() - first));
 }
 
@@ -109,7 +111,6 @@ inline TestResult testSimulation(const Model& model, const Param& theta, const B
   return r;
 }
 
-
 /// The sensor's noise variance from the data alone: the second difference of a smooth signal sampled
 /// well above its bandwidth is almost all noise, and var(Δ²y) = 6 σ² for white noise of variance σ².
 inline double sensorNoiseVariance(const Series& y) {
@@ -124,16 +125,16 @@ inline double sensorNoiseVariance(const Series& y) {
 /// The rule that sets every filter's settings (docs/real-data.md, "The rule"), from the estimation set's
 /// own noise and from what is known of the plant before any fit.
 struct Rule {
-  double sensorVariance = 0;     ///< σ², the sensor's noise variance (sensorNoiseVariance)
-  double measurementNoise = 0;   ///< R = 100 σ²: what the model cannot explain, (10 σ)² ≈ (0.2 V)²
-  double levelNoise = 0;         ///< Q of each level per sample = σ² / 4: half the sensor's σ of drift
+  double sensorVariance = 0;               ///< σ², the sensor's noise variance (sensorNoiseVariance)
+  double measurementNoise = 0;             ///< R = 100 σ²: what the model cannot explain, (10 σ)² ≈ (0.2 V)²
+  double levelNoise = 0;                   ///< Q of each level per sample = σ² / 4: half the sensor's σ of drift
   double parameterSpread = std::log(2.0);  ///< P₀'s σ of each log-parameter: a factor 2
-  double offsetSpread = 0.5;     ///< P₀'s σ of the offset c (V)
-  double upperLevelGuess = 5;    ///< x₁(0) (V): the middle of the sensor's range
-  double upperLevelSpread = 5;   ///< its σ (V): anywhere from empty to full
-  double boundWidth = std::log(4.0);  ///< each log-parameter within θ₀ ×/÷ 4 (2 σ of P₀)
-  double offsetBound = 3;        ///< |c| ≤ 3 V
-  int passes = 20;               ///< passes over the estimation set
+  double offsetSpread = 0.5;               ///< P₀'s σ of the offset c (V)
+  double upperLevelGuess = 5;              ///< x₁(0) (V): the middle of the sensor's range
+  double upperLevelSpread = 5;             ///< its σ (V): anywhere from empty to full
+  double boundWidth = std::log(4.0);       ///< each log-parameter within θ₀ ×/÷ 4 (2 σ of P₀)
+  double offsetBound = 3;                  ///< |c| ≤ 3 V
+  int passes = 20;                         ///< passes over the estimation set
 };
 
 /// Factors on the rule's settings: 1 is the rule, 0.5 and 2 halve and double one (`sensitivity`).
@@ -191,7 +192,8 @@ inline SharedSettings sharedSettings(const Rule& rule, const RuleFactors& f, con
   s.stateCovariance(1, 1) = rule.sensorVariance;  // x₂(0) is the first measurement, less its offset
   s.levelNoise.diagonal().setConstant(rule.levelNoise * f.levelNoise);
   s.measurementNoise << rule.measurementNoise * f.measurementNoise;
-  for (int i = 0; i < 6; ++i) s.parameterCovariance(i, i) = rule.parameterSpread * rule.parameterSpread * f.parameterSpread;
+  for (int i = 0; i < 6; ++i)
+    s.parameterCovariance(i, i) = rule.parameterSpread * rule.parameterSpread * f.parameterSpread;
   s.parameterCovariance(6, 6) = rule.offsetSpread * rule.offsetSpread * f.parameterSpread;
   s.bounds.lower = theta0.array() - rule.boundWidth * f.boundWidth;
   s.bounds.upper = theta0.array() + rule.boundWidth * f.boundWidth;
@@ -248,13 +250,13 @@ inline Identified identifyJoint(const Model& model, const Benchmark& b, const Ru
   s.measurementNoise = shared.measurementNoise;
   s.parameterBounds = shared.bounds;
   const State x0(rule.upperLevelGuess, b.yEst[0]);
-  return identify(model, b, shared, theta0,
-                  [&](const Param& theta) { return JointUkf<Model>(model, x0, theta, s); });
+  return identify(model, b, shared, theta0, [&](const Param& theta) { return JointUkf<Model>(model, x0, theta, s); });
 }
 
 /// The MJUKF in its automatic mode (T and ξ from the sensitivities), with the rule's state settings;
 /// its prior scale of θ is the rule's spread.
-inline Identified identifyModified(const Model& model, const Benchmark& b, const Rule& rule, const RuleFactors& f = {}) {
+inline Identified identifyModified(const Model& model, const Benchmark& b, const Rule& rule,
+                                   const RuleFactors& f = {}) {
   const Param theta0 = firstGuess(b);
   const SharedSettings shared = sharedSettings(rule, f, theta0);
   ModifiedJointUkfSettingsFor<Model> s;
@@ -283,8 +285,7 @@ inline Identified identifyDual(const Model& model, const Benchmark& b, const Rul
   s.initialParameterCovariance = shared.parameterCovariance;
   s.parameterBounds = shared.bounds;
   const State x0(rule.upperLevelGuess, b.yEst[0]);
-  return identify(model, b, shared, theta0,
-                  [&](const Param& theta) { return DualUkf<Model>(model, x0, theta, s); });
+  return identify(model, b, shared, theta0, [&](const Param& theta) { return DualUkf<Model>(model, x0, theta, s); });
 }
 
 }  // namespace mjukf::cascaded

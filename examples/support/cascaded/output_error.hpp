@@ -55,8 +55,8 @@ struct OutputErrorFit {
 namespace detail {
 
 inline Eigen::VectorXd residuals(const Model& model, const Benchmark& b, const Param& theta, double x10) {
-  const Series y =
-      simulate(model, theta, b.uEst, State(x10, std::max(b.yEst[0] - model.physical(theta).offset, 0.0)), b.samplePeriod);
+  const Series y = simulate(model, theta, b.uEst, State(x10, std::max(b.yEst[0] - model.physical(theta).offset, 0.0)),
+                            b.samplePeriod);
   Eigen::VectorXd r(y.size());
   for (std::size_t k = 0; k < y.size(); ++k) r(long(k)) = y[k] - b.yEst[k];
   return r;
@@ -81,7 +81,8 @@ inline OutputErrorFit fitOutputError(const Model& model, const Benchmark& b, con
     for (int i = 0; i + 1 < n; ++i) {
       // A low-discrepancy spread: each start moves each log-parameter within ± ln 2 (c within ± 0.5 V).
       const double spread = std::fmod(0.618034 * (start + 1) * (i + 2) + 0.5, 1.0) * 2 - 1;
-      v(i) = theta0(free[std::size_t(i)]) + (start == 0 ? 0.0 : spread * (free[std::size_t(i)] == Model::kOffset ? 0.5 : 0.69));
+      v(i) = theta0(free[std::size_t(i)]) +
+             (start == 0 ? 0.0 : spread * (free[std::size_t(i)] == Model::kOffset ? 0.5 : 0.69));
     }
     v(n - 1) = 2.0 + 8.0 * std::fmod(0.381966 * start, 1.0);
     Eigen::VectorXd r = detail::residuals(model, b, unpack(v), v(n - 1));

@@ -70,8 +70,8 @@ struct CascadedTanks {
   };
 
   Terms terms{};
-  int subSteps = 8;                  ///< RK4 steps per sample
-  Scalar lowerCeiling = Scalar(10);  ///< the lower tank's level when full (V)
+  int subSteps = 8;                   ///< RK4 steps per sample
+  Scalar lowerCeiling = Scalar(10);   ///< the lower tank's level when full (V)
   Scalar sensorCeiling = Scalar(10);  ///< where the sensor's range ends (V)
 
   /// The physical parameters, from θ (as the model uses them, the terms off included).
