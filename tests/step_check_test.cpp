@@ -106,7 +106,7 @@ TEST(StepCheck, RunsOnANewStepAndEveryIntervalCalls) {
   settings.initialCovariance = Eigen::Matrix2d::Identity();
   settings.measurementNoise = 0.09 * Eigen::Matrix2d::Identity();
   mjukf::Ukf<CountingTank, mjukf::Rk4<double>> filter(CountingTank(), Tank::State(30, 30), Tank::trueParameters(),
-                                                       settings);
+                                                      settings);
   // RK4: 4 derivatives a step; a UKF of n = 2 propagates 5 points; the check 1 + 2 half steps.
   const long perCall = 5 * 4, perCheck = 3 * 4;
   long previous = 0;
