@@ -197,6 +197,9 @@ inline SharedSettings sharedSettings(const Rule& rule, const RuleFactors& f, con
   s.parameterCovariance(6, 6) = rule.offsetSpread * rule.offsetSpread * f.parameterSpread;
   s.bounds.lower = theta0.array() - rule.boundWidth * f.boundWidth;
   s.bounds.upper = theta0.array() + rule.boundWidth * f.boundWidth;
+  // A fraction of the spill, and an exponent between Torricelli's and a film's, are at most 1.
+  s.bounds.upper(Model::kLnK5) = std::min(s.bounds.upper(Model::kLnK5), 0.0);
+  s.bounds.upper(Model::kLnAlpha) = std::min(s.bounds.upper(Model::kLnAlpha), 0.0);
   s.bounds.lower(Model::kOffset) = -rule.offsetBound;
   s.bounds.upper(Model::kOffset) = rule.offsetBound;
   s.passes = std::max(1, static_cast<int>(std::lround(rule.passes * f.passes)));
@@ -208,7 +211,8 @@ struct Identified {
   Param theta;
   int bestPass = -1;
   double estimationRms = std::numeric_limits<double>::infinity();
-  long refused = 0;  ///< steps a filter refused, over every pass
+  long refused = 0;                ///< steps a filter refused, over every pass
+  std::vector<double> passErrors;  ///< each pass's estimation RMS
 };
 
 /// Passes over the estimation set. Each pass is a filter made afresh by `makeFilter(θ)` from the last
@@ -234,6 +238,7 @@ Identified identify(const Model& model, const Benchmark& b, const SharedSettings
     start = filter.parameters();
     shared.bounds.clamp(start);  // a mean of clamped values can stray out by a rounding
     const double error = estimationError(model, start, b);
+    best.passErrors.push_back(error);
     if (error < best.estimationRms) best.estimationRms = error, best.theta = start, best.bestPass = pass;
   }
   return best;

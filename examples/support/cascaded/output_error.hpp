@@ -67,8 +67,8 @@ inline Eigen::VectorXd residuals(const Model& model, const Benchmark& b, const P
 /// Levenberg–Marquardt on v = (θ's free components, x₁(0)) from each of `starts` starts spread
 /// deterministically around the first guess; the best fit.
 inline OutputErrorFit fitOutputError(const Model& model, const Benchmark& b, const std::vector<int>& free,
-                                     int starts = 12) {
-  const Param theta0 = firstGuess(b);
+                                     int starts = 12, const Param* from = nullptr) {
+  const Param theta0 = from ? *from : firstGuess(b);
   const int n = int(free.size()) + 1;
   const auto unpack = [&](const Eigen::VectorXd& v) {
     Param theta = theta0;
