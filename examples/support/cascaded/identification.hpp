@@ -213,6 +213,7 @@ struct Identified {
   double estimationRms = std::numeric_limits<double>::infinity();
   long refused = 0;                ///< steps a filter refused, over every pass
   std::vector<double> passErrors;  ///< each pass's estimation RMS
+  double innovationRms = 0;        ///< the RMS innovation of the best pass
 };
 
 /// Passes over the estimation set. Each pass is a filter made afresh by `makeFilter(θ)` from the last
@@ -228,18 +229,28 @@ Identified identify(const Model& model, const Benchmark& b, const SharedSettings
   const double h = b.samplePeriod;
   for (int pass = 0; pass < shared.passes; ++pass) {
     auto filter = makeFilter(start);
+    double innovations = 0;
+    long updates = 0;
     for (std::size_t k = 0; k < b.yEst.size(); ++k) {
       if (k > 0 && !taken(filter.timeUpdate(double(k - 1) * h, h, Model::Input(b.uEst[k - 1])))) {
         ++best.refused;  // the estimate stays as it was; the record goes on
         continue;
       }
-      if (!taken(filter.measurementUpdate(Model::Meas(b.yEst[k])))) ++best.refused;
+      if (!taken(filter.measurementUpdate(Model::Meas(b.yEst[k])))) {
+        ++best.refused;
+        continue;
+      }
+      innovations += filter.lastUpdate().innovation.squaredNorm();
+      ++updates;
     }
     start = filter.parameters();
     shared.bounds.clamp(start);  // a mean of clamped values can stray out by a rounding
     const double error = estimationError(model, start, b);
     best.passErrors.push_back(error);
-    if (error < best.estimationRms) best.estimationRms = error, best.theta = start, best.bestPass = pass;
+    if (error < best.estimationRms) {
+      best.estimationRms = error, best.theta = start, best.bestPass = pass;
+      best.innovationRms = std::sqrt(innovations / double(std::max(updates, 1L)));
+    }
   }
   return best;
 }
