@@ -112,6 +112,10 @@ int identifyCommand(const Arguments& args) {
       "| published: Volterra | 0.54 | | | | |\n"
       "| published: PNLSS | 0.45 | | | | |\n"
       "| published: NLSS2 | 0.343 | | | | |\n\n";
+  // Where the JUKF stopped, against the optimum: a local output-error fit started from its θ̂.
+  const OutputErrorFit refined = fitOutputError(model, b, structures().back().free, 1, &rows[0].identified.theta);
+  text += "A local output-error fit started from the JUKF's parameters: estimation RMS " +
+          fixed(refined.estimationRms) + ", test RMS " + fixed(testSimulation(model, refined.theta, b).rms) + ".\n\n";
   text += "JUKF test RMS: " + fixed(rows[0].test.rms, 4) + " V\n";
 
   Plotter plotter;
