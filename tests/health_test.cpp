@@ -100,13 +100,30 @@ TEST(HealthMonitor, AlarmsLatchUntilCleared) {
 }
 
 TEST(HealthMonitor, RefusalsInARowRaiseTheirAlarmAndATakenCallEndsTheStreak) {
+  using mjukf::detail::CallKind;
   mjukf::HealthSettings<double> settings;
   Monitor monitor(settings);
-  for (int k = 0; k < 9; ++k) monitor.observeStatus(Status::NonFiniteMeasurement);
-  monitor.observeStatus(Status::Ok);
-  for (int k = 0; k < 9; ++k) monitor.observeStatus(Status::MeasurementRejected);
+  for (int k = 0; k < 9; ++k) monitor.observeStatus(Status::NonFiniteMeasurement, CallKind::Measurement);
+  monitor.observeStatus(Status::Ok, CallKind::Measurement);
+  for (int k = 0; k < 9; ++k) monitor.observeStatus(Status::MeasurementRejected, CallKind::Measurement);
   EXPECT_EQ(monitor.health(), Health::Ok);
-  monitor.observeStatus(Status::NonFiniteResult);
+  monitor.observeStatus(Status::NonFiniteResult, CallKind::Measurement);
+  EXPECT_EQ(monitor.health(), Health::RepeatedRefusals);
+}
+
+TEST(HealthMonitor, RefusedMeasurementsCountAcrossTakenTimeUpdates) {
+  // A filter whose gate rejects every measurement (it lost lock) while its time updates are taken.
+  using mjukf::detail::CallKind;
+  mjukf::HealthSettings<double> settings;
+  Monitor monitor(settings);
+  for (int k = 0; k < 9; ++k) {
+    monitor.observeStatus(Status::Ok, CallKind::Propagation);
+    monitor.observeStatus(Status::MeasurementRejected, CallKind::Measurement);
+  }
+  EXPECT_EQ(monitor.health(), Health::Ok);
+  EXPECT_EQ(monitor.statistics().refusalsInARow, 9);
+  monitor.observeStatus(Status::Ok, CallKind::Propagation);
+  monitor.observeStatus(Status::MeasurementRejected, CallKind::Measurement);
   EXPECT_EQ(monitor.health(), Health::RepeatedRefusals);
 }
 
@@ -243,6 +260,28 @@ TEST(FilterHealth, FloatFiltersRunTheSameTests) {
   for (int k = 0; k < 50; ++k)
     monitor.observeUpdate(Eigen::Matrix<float, 1, 1>(3.0f), covariance, 9.0f, nullptr, none, none, lower, -lower);
   EXPECT_EQ(monitor.health(), Health::InnovationsTooLarge);
+}
+
+TEST(FilterHealth, AGatedFilterThatLostLockIsFlagged) {
+  // The gate is set at χ²(1) 0.999; after 100 good updates the sensor reads 100 higher, so every
+  // measurement is rejected while the time updates between them are taken.
+  mjukf::UkfSettingsFor<RandomWalk> s;
+  s.initialCovariance.setIdentity();
+  s.processNoise(0, 0) = kQ;
+  s.measurementNoise(0, 0) = kR;
+  s.gate = mjukf::MeasurementGate<double, 1>::chiSquare(0.999);
+  mjukf::Ukf<RandomWalk> filter(RandomWalk(), RandomWalk::State(0), RandomWalk::Param(0), s);
+  std::mt19937_64 rng(4);
+  std::normal_distribution<double> normal;
+  double x = 0;
+  for (int k = 0; k < 120; ++k) {
+    x += std::sqrt(kQ) * normal(rng);
+    ASSERT_TRUE(mjukf::taken(filter.timeUpdate(double(k), 1.0)));
+    const double offset = k < 100 ? 0.0 : 100.0;
+    const Status status = filter.measurementUpdate(RandomWalk::Meas(x + offset + std::sqrt(kR) * normal(rng)));
+    EXPECT_EQ(mjukf::taken(status), k < 100) << "update " << k;
+  }
+  EXPECT_EQ(filter.health(), Health::RepeatedRefusals);
 }
 
 TEST(FilterHealth, InvalidSettingsAreNamed) {

@@ -37,7 +37,9 @@ enum class Health : unsigned char {
   /// A parameter estimate ended a block on one of its `parameterBounds`: the data pull it beyond what
   /// the bounds allow.
   ParameterAtBound,
-  /// `refusalStreak` calls in a row were refused (any Status other than Ok and Repaired).
+  /// `refusalStreak` measurement updates in a row were refused (any Status other than Ok and Repaired,
+  /// the gate's rejections included, whatever the time updates between them did), or as many time
+  /// updates and open-loop propagations in a row.
   RepeatedRefusals,
 };
 
@@ -97,7 +99,7 @@ struct HealthStatistics {
   Scalar autocorrelationScore = 0, autocorrelationBound = 0;
   /// The last complete block's largest parameter motion in standard deviations (0 without a covariance).
   Scalar parameterMotionSigmas = 0;
-  /// Refused calls in a row, now.
+  /// Refused calls in a row, now: the longer of the two streaks (measurement updates; propagations).
   int refusalsInARow = 0;
 };
 
@@ -115,6 +117,9 @@ SettingsError validateHealth(const char* owner, const HealthSettings<Scalar>& he
   if (health.refusalStreak < 1) return invalid(owner, "health.refusalStreak", "must be >= 1");
   return {};
 }
+
+// What a call was, for the refusal streaks.
+enum class CallKind { Measurement, Propagation };
 
 // The monitor: accumulates one block of updates at a time in fixed-size members (no allocation), and
 // tests a block when it is complete. Costs O(m) per update and O(m + p) per block.
@@ -146,6 +151,7 @@ class HealthMonitor {
   // Everything back to the start (reset()).
   void clear() {
     stats_ = HealthStatistics<Scalar>();
+    measurementRefusals_ = propagationRefusals_ = 0;
     startBlock();
     blockStarted_ = false;
   }
@@ -160,15 +166,19 @@ class HealthMonitor {
     blockStarted_ = false;
   }
 
-  // Every public call's outcome: counts refusals in a row.
-  void observeStatus(Status status) {
+  // Every public call's outcome: counts refusals in a row, of measurement updates and of propagations
+  // (time updates and open-loop propagations) apart, so that a filter whose every measurement is
+  // refused (a gate that lost lock) is flagged although its time updates between them are taken.
+  void observeStatus(Status status, CallKind kind) {
     if (!settings_.enabled) return;
-    if (taken(status)) {
-      stats_.refusalsInARow = 0;
-      return;
-    }
-    if (++stats_.refusalsInARow >= settings_.refusalStreak) raise(Health::RepeatedRefusals);
+    int& streak = kind == CallKind::Measurement ? measurementRefusals_ : propagationRefusals_;
+    streak = taken(status) ? 0 : streak + 1;
+    stats_.refusalsInARow = measurementRefusals_ > propagationRefusals_ ? measurementRefusals_ : propagationRefusals_;
+    if (streak >= settings_.refusalStreak) raise(Health::RepeatedRefusals);
   }
+
+  // Whether the next committed update starts or ends a block: where the parameters' σ is read.
+  bool atBlockBoundary() const { return !blockStarted_ || updatesInBlock_ + 1 >= settings_.window; }
 
   // A committed measurement update: its innovation ν, the diagonal of P_yy and its NIS over the
   // components present (`present` null: all). `parameters` and `parameterSigma` (negative: none) are
@@ -249,7 +259,7 @@ class HealthMonitor {
       if (!(blockStartSigma_(j) > 0)) continue;
       using std::abs;
       const Scalar sigmas = abs(parameters(j) - blockStartParameters_(j)) / blockStartSigma_(j);
-      if (!(sigmas <= motion)) motion = sigmas;  // NaN propagates as an alarm below
+      if (!(sigmas <= motion)) motion = sigmas;  // a NaN is kept unless a later larger value replaces it
     }
     stats_.parameterMotionSigmas = motion;
     if (verdict == Health::Ok && !(motion <= settings_.runawaySigmas)) verdict = Health::ParameterRunaway;
@@ -295,6 +305,7 @@ class HealthMonitor {
   Eigen::Matrix<int, MeasDim, 1> count_ = Eigen::Matrix<int, MeasDim, 1>::Zero();
   Mask previousPresent_ = Mask::Constant(false);
   bool blockStarted_ = false;
+  int measurementRefusals_ = 0, propagationRefusals_ = 0;
   Param blockStartParameters_ = Param::Zero(), blockStartSigma_ = Param::Constant(Scalar(-1));
 };
 

@@ -1147,7 +1147,7 @@ class UnscentedEngine {
   template <class InputSource>
   Status timeUpdateWith(const InputSource& input, Scalar t, Scalar h, int steps) {
     const Status status = timeUpdateUnmonitored(input, t, h, steps);
-    health_.observeStatus(status);
+    health_.observeStatus(status, CallKind::Propagation);
     return status;
   }
   template <class InputSource>
@@ -1186,7 +1186,7 @@ class UnscentedEngine {
   template <class InputSource>
   Status propagateMeanWith(const InputSource& input, Scalar t, Scalar h, int steps) {
     const Status status = propagateMeanUnmonitored(input, t, h, steps);
-    health_.observeStatus(status);
+    health_.observeStatus(status, CallKind::Propagation);
     return status;
   }
   template <class InputSource>
@@ -1224,7 +1224,7 @@ class UnscentedEngine {
   // one calls correctState). The input reaches g, and is checked, only when the measurement takes it.
   Status updateWithInput(const Meas& y, const Input& u, const Mask* present) {
     const Status status = updateUnmonitored(y, u, present);
-    health_.observeStatus(status);
+    health_.observeStatus(status, CallKind::Measurement);
     if (taken(status)) observeCommittedUpdate(present);
     return status;
   }
@@ -1238,10 +1238,12 @@ class UnscentedEngine {
   // What the health monitor sees of a committed update: its diagnostics, and the parameters with
   // their standard deviations (where the filter has a covariance of them) and bounds.
   void observeCommittedUpdate(const Mask* present) {
+    if (!settings_.health.enabled) return;
     const Filter& filter = static_cast<const Filter&>(*this);
     const Diagnostics& d = estimate_.diagnostics();
     Param sigma = Param::Constant(Scalar(-1));
-    if constexpr (hasParameterCovariance<Filter>) sigma = filter.parameterCovariance().diagonal().cwiseSqrt();
+    if constexpr (hasParameterCovariance<Filter>)  // read only where a block starts
+      if (health_.atBlockBoundary()) sigma = filter.parameterCovariance().diagonal().cwiseSqrt();
     Param lower = Param::Constant(-std::numeric_limits<Scalar>::infinity());
     Param upper = Param::Constant(std::numeric_limits<Scalar>::infinity());
     if constexpr (hasParameterBounds<Settings>) {
