@@ -118,7 +118,8 @@ struct Sample : detail::ParameterCovarianceField<typename Filter::Scalar, Filter
   /// was taken, else of an earlier one (diagnostics.hpp). With components missing, their entries are
   /// those of the reduced update (zero innovation, an identity row and column of P_yy).
   UpdateDiagnostics<Scalar, Filter::MeasDim> diagnostics;
-  // The filter's health (another issue adds `health()` to the filters) is recorded here once it exists.
+  /// `health()` after the sample (health.hpp): the first alarm of the run so far, or Ok.
+  Health health = Health::Ok;
 
   /// True when both calls of the sample were taken (Ok or Repaired).
   bool taken() const { return mjukf::taken(timeUpdate) && mjukf::taken(measurementUpdate); }
@@ -184,6 +185,7 @@ void runSample(Filter& filter, const DataSet<typename Filter::Model>& data, long
   sample.covariance = filter.covariance();
   if constexpr (detail::hasParameterCovariance<Filter>) sample.parameterCovariance = filter.parameterCovariance();
   sample.diagnostics = filter.lastUpdate();
+  sample.health = filter.health();
 }
 
 /// Runs `filter` from where it is over every sample of `data` (runSample) and calls
