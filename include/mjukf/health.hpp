@@ -89,14 +89,21 @@ struct HealthStatistics {
   long alarmAtUpdate = 0;
   /// Committed measurement updates since construction or `reset`.
   long updates = 0;
-  /// Complete blocks, and blocks that raised an alarm.
-  long blocks = 0, alarmedBlocks = 0;
-  /// The last complete block's summed NIS over its degrees of freedom (1 on a consistent filter), and
-  /// the bounds it was tested against on the same scale.
-  Scalar normalisedNis = 0, nisLowerBound = 0, nisUpperBound = 0;
+  /// Complete blocks.
+  long blocks = 0;
+  /// Complete blocks that raised an alarm.
+  long alarmedBlocks = 0;
+  /// The last complete block's summed NIS over its degrees of freedom (1 on a consistent filter).
+  Scalar normalisedNis = 0;
+  /// The lower bound `normalisedNis` was tested against, on the same scale.
+  Scalar nisLowerBound = 0;
+  /// The upper bound `normalisedNis` was tested against, on the same scale.
+  Scalar nisUpperBound = 0;
   /// The last complete block's largest |√N r₁| over the measured components (r₁ the lag-one
-  /// autocorrelation of the component's normalised innovation; ~N(0, 1) when they are white), and its bound.
-  Scalar autocorrelationScore = 0, autocorrelationBound = 0;
+  /// autocorrelation of the component's normalised innovation; ~N(0, 1) when they are white).
+  Scalar autocorrelationScore = 0;
+  /// The bound `autocorrelationScore` was tested against.
+  Scalar autocorrelationBound = 0;
   /// The last complete block's largest parameter motion in standard deviations (0 without a covariance).
   Scalar parameterMotionSigmas = 0;
   /// Refused calls in a row, now: the longer of the two streaks (measurement updates; propagations).

@@ -69,15 +69,22 @@ struct CascadedTanks {
     bool sensorOffset = true;   ///< y = x₂ + c (else c = 0)
   };
 
-  Terms terms{};
+  Terms terms{};                      ///< which terms the model has (all by default)
   int subSteps = 8;                   ///< RK4 steps per sample
   Scalar lowerCeiling = Scalar(10);   ///< the lower tank's level when full (V)
   Scalar sensorCeiling = Scalar(10);  ///< where the sensor's range ends (V)
 
   /// The physical parameters, from θ (as the model uses them, the terms off included).
   struct Physical {
-    Scalar k1, k3, k4, hMax, k5, alpha, offset;
+    Scalar k1;      ///< outflow coefficient of the upper tank, k₁
+    Scalar k3;      ///< outflow coefficient of the lower tank, k₃
+    Scalar k4;      ///< pump gain, k₄
+    Scalar hMax;    ///< level at which the upper tank spills, h_max (V)
+    Scalar k5;      ///< share of the spill that reaches the lower tank, k₅
+    Scalar alpha;   ///< exponent of the lower tank's outflow, α
+    Scalar offset;  ///< sensor offset, c (V)
   };
+  /// The physical parameters of θ.
   Physical physical(const Param& theta) const {
     using std::exp;
     return {exp(theta(kLnK1)),
