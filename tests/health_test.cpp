@@ -77,7 +77,7 @@ TEST(HealthMonitor, AParameterMovingFarBeyondItsSigmaIsARunaway) {
   EXPECT_EQ(feed(1.0, 0.0, 500, 0.1).health(), Health::Ok);
 }
 
-TEST(HealthMonitor, AlarmsLatchUntilCleared) {
+TEST(HealthMonitor, TheVerdictFollowsTheLastBlockAndTheFirstAlarmStays) {
   mjukf::HealthSettings<double> settings;
   Monitor monitor(settings);
   const Eigen::Matrix2d covariance = Eigen::Matrix2d::Identity();
@@ -93,10 +93,12 @@ TEST(HealthMonitor, AlarmsLatchUntilCleared) {
     const Eigen::Vector2d e(normal(rng), normal(rng));
     monitor.observeUpdate(e, covariance, e.squaredNorm(), nullptr, Param1(0), Param1(-1), Param1(-kInf), Param1(kInf));
   }
-  EXPECT_EQ(monitor.statistics().lastBlock, Health::Ok);     // the block after is healthy ...
-  EXPECT_EQ(monitor.health(), Health::InnovationsTooLarge);  // ... and the alarm stays
+  EXPECT_EQ(monitor.health(), Health::Ok);  // the block after is healthy, and so is the filter now ...
+  EXPECT_EQ(monitor.statistics().firstAlarm, Health::InnovationsTooLarge);  // ... which once was not
+  EXPECT_EQ(monitor.statistics().alarmedBlocks, 1);
   monitor.clearAlarm();
-  EXPECT_EQ(monitor.health(), Health::Ok);
+  EXPECT_EQ(monitor.statistics().firstAlarm, Health::Ok);
+  EXPECT_EQ(monitor.statistics().alarmAtUpdate, 0);
 }
 
 TEST(HealthMonitor, RefusalsInARowRaiseTheirAlarmAndATakenCallEndsTheStreak) {

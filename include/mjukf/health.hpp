@@ -16,8 +16,8 @@
 
 namespace mjukf {
 
-/// What a filter's health monitor concluded: `Health::Ok` means no alarm. Every other value names the
-/// first test that failed (docs/troubleshooting.md, "Health alarms", says what to change).
+/// What a filter's health monitor concludes now: `Health::Ok` means no alarm. Every other value names
+/// the test that failed (docs/troubleshooting.md, "Health alarms", says what to change).
 enum class Health : unsigned char {
   Ok,  ///< No test failed.
   /// Over a block of updates the innovations were larger than their covariance P_yy says (the block's
@@ -80,12 +80,13 @@ struct HealthSettings {
 /// The numbers behind `health()` (a filter's `healthStatistics()`).
 template <class Scalar>
 struct HealthStatistics {
-  /// The first alarm since construction, `reset` or `clearHealth()`: what `health()` returns. Alarms
-  /// latch, so a run that went wrong and recovered still says so at its end.
-  Health latched = Health::Ok;
-  /// The verdict of the last complete block alone (Ok when it raised no alarm).
+  /// The first alarm since construction, `reset` or `clearHealth()`: it stays, so a run that went
+  /// wrong and recovered still says so at its end (`health()` is the state now).
+  Health firstAlarm = Health::Ok;
+  /// The verdict of the last complete block alone (Ok when it raised no alarm): what `health()` returns
+  /// unless a streak of refusals is under way.
   Health lastBlock = Health::Ok;
-  /// The committed measurement update at which the latched alarm was raised (counting from 1); 0 if none.
+  /// The committed measurement update at which `firstAlarm` was raised (counting from 1); 0 if none.
   long alarmAtUpdate = 0;
   /// Committed measurement updates since construction or `reset`.
   long updates = 0;
@@ -153,7 +154,13 @@ class HealthMonitor {
   }
 
   const HealthStatistics<Scalar>& statistics() const { return stats_; }
-  Health health() const { return stats_.latched; }
+  // Now: refusals in a row at the streak's length, else the last complete block's verdict.
+  Health health() const {
+    if (settings_.enabled &&
+        (measurementRefusals_ >= settings_.refusalStreak || propagationRefusals_ >= settings_.refusalStreak))
+      return Health::RepeatedRefusals;
+    return stats_.lastBlock;
+  }
 
   // Everything back to the start (reset()).
   void clear() {
@@ -162,9 +169,9 @@ class HealthMonitor {
     startBlock();
     blockStarted_ = false;
   }
-  // The latched alarm only (clearHealth()).
+  // The first alarm only (clearHealth()).
   void clearAlarm() {
-    stats_.latched = Health::Ok;
+    stats_.firstAlarm = Health::Ok;
     stats_.alarmAtUpdate = 0;
   }
   // A new pass: the block under way is dropped, the alarms kept.
@@ -286,8 +293,8 @@ class HealthMonitor {
   }
 
   void raise(Health alarm) {
-    if (stats_.latched != Health::Ok) return;
-    stats_.latched = alarm;
+    if (stats_.firstAlarm != Health::Ok) return;
+    stats_.firstAlarm = alarm;
     stats_.alarmAtUpdate = stats_.updates;
   }
 

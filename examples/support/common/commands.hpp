@@ -172,16 +172,22 @@ FilterSetup<Experiment> filterSetup(const Arguments& args) {
   return setup;
 }
 
-// The filter's health at the end of a run (docs/robustness.md, "The health monitor"): the latched
-// alarm, where it was raised and how many blocks raised one, and the last complete block's statistics.
+// The filter's health at the end of a run (docs/robustness.md, "The health monitor"): its verdict
+// then, the first alarm of the run and where it was raised, how many blocks raised one, and the last
+// complete block's statistics.
 template <class Model>
 void printHealth(const EstimateRun<Model>& run) {
   const auto& h = run.healthStatistics;
-  if (run.health == Health::Ok)
+  if (h.firstAlarm == Health::Ok)
     std::printf("health: ok (no alarm in %ld blocks of measurement updates)\n", h.blocks);
-  else
+  else if (run.health == h.firstAlarm)
     std::printf("health: %s (first raised at measurement update %ld; %ld of %ld blocks raised an alarm)\n",
                 toString(run.health), h.alarmAtUpdate, h.alarmedBlocks, h.blocks);
+  else
+    std::printf(
+        "health: %s (earlier: %s, first raised at measurement update %ld; %ld of %ld blocks raised an "
+        "alarm)\n",
+        toString(run.health), toString(h.firstAlarm), h.alarmAtUpdate, h.alarmedBlocks, h.blocks);
   if (h.blocks > 0)
     std::printf(
         "health, last block: normalised NIS %.4g (bounds %.3g, %.3g), lag-one autocorrelation %.3g (bound %.3g), "

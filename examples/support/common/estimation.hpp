@@ -68,8 +68,8 @@ struct EstimateRun {
   /// The filter's own covariance of θ̂ at the end (JUKF's θ block, the dual's P^θ); empty for a filter
   /// that reports none.
   std::optional<Eigen::Matrix<typename Model::Scalar, Model::ParamDim, Model::ParamDim>> finalParameterCovariance;
-  /// The filter's health at the end of the run (its latched alarm, or Ok) and the statistics behind it
-  /// (health.hpp; docs/robustness.md, "The health monitor").
+  /// The filter's health at the end of the run (its verdict then) and the statistics behind it (the first alarm among
+  /// them) (health.hpp; docs/robustness.md, "The health monitor").
   Health health = Health::Ok;
   HealthStatistics<typename Model::Scalar> healthStatistics;
 };

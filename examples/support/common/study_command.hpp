@@ -173,7 +173,7 @@ struct StudyResult {
   /// (θ̂ − θ)ᵀ P_θ⁻¹ (θ̂ − θ) at the last row, with the filter's own P_θ; NaN for a filter that reports none.
   double nees = std::nan("");
   bool diverged = false;
-  /// The filter's health at the end of the run (health.hpp): its first alarm, or Ok.
+  /// The filter's health at the end of the run (health.hpp): its verdict at the end (the last block's alarm, or Ok).
   Health health = Health::Ok;
   Status status = Status::Ok;
   long stoppedAtRow = 0;  ///< the refused row, or the last row when the run went through
@@ -413,7 +413,8 @@ int studyCommand(const std::vector<std::string>& words) {
   say(format(
       "diverged: the filter refused a step, or a final estimate is not finite or off by more than %g x the larger",
       kDivergenceBound));
-  say("  of the truth and the first guess's error; alarm: the filter's health monitor raised an alarm in the run");
+  say("  of the truth and the first guess's error; alarm: the filter's health monitor said the run ended with an alarm "
+      "(its last block's verdict)");
   say("  (docs/robustness.md, \"The health monitor\"); unflagged: runs that diverged without one");
   Plotter plotter;
   for (std::size_t s = 0; s < scenarios.size(); ++s) {

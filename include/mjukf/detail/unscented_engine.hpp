@@ -951,13 +951,15 @@ class UnscentedEngine {
   /// `input(time())`.
   Scalar time() const { return time_; }
 
-  /// The health monitor's verdict (health.hpp): `Health::Ok` when no test has failed since construction,
-  /// `reset` or `clearHealth()`; otherwise the first alarm, which stays until one of those.
+  /// The health monitor's verdict now (health.hpp): `Health::Ok` when the last complete block of
+  /// measurement updates passed its tests and no streak of refusals is under way, otherwise the alarm.
+  /// The first alarm since construction, `reset` or `clearHealth()` stays in
+  /// `healthStatistics().firstAlarm`, with the update that raised it.
   Health health() const { return health_.health(); }
-  /// The statistics behind `health()`: the last block's normalised NIS and autocorrelation against their
-  /// bounds, the parameters' motion, counts of blocks, alarms and refusals in a row.
+  /// The statistics behind `health()`: the first alarm, the last block's normalised NIS and
+  /// autocorrelation against their bounds, the parameters' motion, counts of blocks, alarms and refusals.
   const HealthStatistics<Scalar>& healthStatistics() const { return health_.statistics(); }
-  /// Clears the latched alarm (after the user acted on it); the statistics go on.
+  /// Clears the first alarm (after the user acted on it); the statistics go on.
   void clearHealth() { health_.clearAlarm(); }
 
   /// The filter built from these initial values and settings, or the SettingsError naming the first
