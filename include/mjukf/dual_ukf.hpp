@@ -405,11 +405,11 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
 /// Template arguments: docs/design.md, "Template arguments of every filter"; the parameter filter has
 /// the state filter's sigma-point set and covariance form.
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled,
-          class Form = FullCovariance>
+          class Form = FullCovariance, class Features = AllFeatures>
 class DualUkf : public detail::EngineOf<
-                    DualUkf<Model_, Integrator_, PointSet, Form>, Model_, Integrator_,
+                    DualUkf<Model_, Integrator_, PointSet, Form, Features>, Model_, Integrator_,
                     DualUkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::ParamDim, Model_::MeasDim>,
-                    detail::DualParameters, Model_::StateDim, PointSet, Form> {
+                    detail::DualParameters, Model_::StateDim, PointSet, Form, Features> {
   static_assert(checkModel<Model_, 1>());
   using Engine = typename DualUkf::UnscentedEngine;
   using Policy = typename Engine::PolicyType;

@@ -104,10 +104,10 @@ using JointUkfSettingsFor = JointUkfSettings<typename Model::Scalar, Model::Stat
 /// Template arguments (model, stepper, sigma-point set, covariance form): docs/design.md, "Template
 /// arguments of every filter".
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled,
-          class Form = FullCovariance>
-class JointUkf : public detail::EngineOf<JointUkf<Model_, Integrator_, PointSet, Form>, Model_, Integrator_,
+          class Form = FullCovariance, class Features = AllFeatures>
+class JointUkf : public detail::EngineOf<JointUkf<Model_, Integrator_, PointSet, Form, Features>, Model_, Integrator_,
                                          JointUkfSettingsFor<Model_>, detail::AugmentedParameters,
-                                         Model_::StateDim + Model_::ParamDim, PointSet, Form> {
+                                         Model_::StateDim + Model_::ParamDim, PointSet, Form, Features> {
   static_assert(checkModel<Model_, 1>());
   using Engine = typename JointUkf::UnscentedEngine;
   friend Engine;

@@ -11,6 +11,7 @@
 
 #include "mjukf/detail/unscented_engine.hpp"
 #include "mjukf/detail/validation.hpp"
+#include "mjukf/features.hpp"
 #include "mjukf/filter_settings.hpp"
 #include "mjukf/model.hpp"
 #include "mjukf/parameter_bounds.hpp"
@@ -110,11 +111,16 @@ namespace detail {
 /// The parameter policy of `ModifiedJointUkf` (docs/algorithms.md §5): every sigma point χᵢ carries its
 /// own θᵢ (eq. 8), is propagated and measured with it, and the θᵢ move against their point's
 /// measurement error (eq. 9); θ̂ is their mean (eq. 10). With the automatic modes, T and a ξ per
-/// parameter come from the sensitivities (parameter_sensitivity.hpp). detail/unscented_engine.hpp §3
-/// lists what a policy supplies.
-template <class Model, class Integrator, class Settings, class Est>
+/// parameter come from the sensitivities (parameter_sensitivity.hpp); compiled out (`Features`,
+/// features.hpp), their state and code are absent. detail/unscented_engine.hpp §3 lists what a policy
+/// supplies.
+template <class Model, class Integrator, class Settings, class Est, class Features = AllFeatures>
 class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settings, Est> {
   using Base = ParameterPolicy<Model, Integrator, Settings, Est>;
+  static constexpr bool Automatic = Features::automaticModes;
+  // A member of the automatic modes' state: absent (an empty type of its own) when they are compiled out.
+  template <class T, int Id>
+  using IfAutomatic = std::conditional_t<Automatic, T, Absent<Id>>;
 
  public:
   using Base::StateDim, Base::ParamDim, Base::MeasDim, Base::Count;
@@ -142,13 +148,15 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   // Eq. 8: θᵢ = θ̂₀ − p_θ (n + 1) + p_θ (i + 1), i = 0 … 2n; their mean is θ̂₀. The automatic modes
   // start knowing each parameter to about the larger of its size and the half-width of the θᵢ.
   void spread(const Settings& s, const Param& center) {
-    Param scale = center.cwiseAbs().cwiseMax(s.parameterSpread.cwiseAbs() * Scalar(StateDim + 1));
-    for (int r = 0; r < ParamDim; ++r)
-      if (!(scale(r) > Scalar(0))) scale(r) = Scalar(1);
-    sensitivity_.start(scale, s.measurementNoise);
-    timeUpdates_ = 0;
-    transformation_.setZero();
-    scalings_.setZero();
+    if constexpr (Automatic) {
+      Param scale = center.cwiseAbs().cwiseMax(s.parameterSpread.cwiseAbs() * Scalar(StateDim + 1));
+      for (int r = 0; r < ParamDim; ++r)
+        if (!(scale(r) > Scalar(0))) scale(r) = Scalar(1);
+      sensitivity_.start(scale, s.measurementNoise);
+      timeUpdates_ = 0;
+      transformation_.setZero();
+      scalings_.setZero();
+    }
     parameters_ = center;
     for (int i = 0; i < Count; ++i)
       parameterPoints_.col(i) = center - s.parameterSpread * Scalar(StateDim + 1) + s.parameterSpread * Scalar(i + 1);
@@ -156,28 +164,35 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
       for (int i = 0; i < Count; ++i) s.parameterBounds.clamp(parameterPoints_.col(i));
   }
   // A new state estimate that does not depend on θ̂ (reset of the state alone): W = 0.
-  void restartState() { sensitivity_.restartState(); }
+  void restartState() {
+    if constexpr (Automatic) sensitivity_.restartState();
+  }
 
   // What the parameter part has learnt (the filter's ParameterKnowledge), and a new pass from it: the
   // sensitivities' schedule restarts as at construction (a refresh at the first time update, W = 0).
   struct Knowledge {
     Param parameters;
     ParamPoints parameterPoints;
-    Sensitivity sensitivity;
-    Transformation transformation;
-    Param scalings;
+    MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<Sensitivity, 1> sensitivity;
+    MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<Transformation, 2> transformation;
+    MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<Param, 3> scalings;
   };
   Knowledge knowledge() const {
-    return Knowledge{parameters_, parameterPoints_, sensitivity_, transformation_, scalings_};
+    if constexpr (Automatic)
+      return Knowledge{parameters_, parameterPoints_, sensitivity_, transformation_, scalings_};
+    else
+      return Knowledge{parameters_, parameterPoints_, {}, {}, {}};
   }
   void startPass(const Knowledge& k) {
     parameters_ = k.parameters;
     parameterPoints_ = k.parameterPoints;
-    sensitivity_ = k.sensitivity;
-    sensitivity_.restartPass();
-    transformation_ = k.transformation;
-    scalings_ = k.scalings;
-    timeUpdates_ = 0;
+    if constexpr (Automatic) {
+      sensitivity_ = k.sensitivity;
+      sensitivity_.restartPass();
+      transformation_ = k.transformation;
+      scalings_ = k.scalings;
+      timeUpdates_ = 0;
+    }
   }
 
   template <class Step>
@@ -188,17 +203,19 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   // about point 0 (χ₀ = x̂ with θ₀), whose propagation is the nominal of the forward differences.
   template <class Step>
   void propagatePoints(const Step& step, Points& points) {
-    const State x0 = points.col(0);
+    [[maybe_unused]] const State x0 = points.col(0);
     for (int i = 0; i < Count; ++i) {
       const Param theta = parameterPoints_.col(i);
       points.col(i) = step.propagate(theta, points.col(i));
     }
-    if (!automatic_) return;
-    const int every = step.settings.sensitivityInterval;
-    const bool refreshDue = every == 0 ? timeUpdates_ == 0 : timeUpdates_ % every == 0;
-    if (!refreshDue) return sensitivity_.keepPrediction(step.interval());
-    sensitivity_.predict(x0, parameterPoints_.col(0), points.col(0), step.interval(),
-                         [&](const State& x, const Param& theta) { return step.propagate(theta, x); });
+    if constexpr (Automatic) {
+      if (!automatic_) return;
+      const int every = step.settings.sensitivityInterval;
+      const bool refreshDue = every == 0 ? timeUpdates_ == 0 : timeUpdates_ % every == 0;
+      if (!refreshDue) return sensitivity_.keepPrediction(step.interval());
+      sensitivity_.predict(x0, parameterPoints_.col(0), points.col(0), step.interval(),
+                           [&](const State& x, const Param& theta) { return step.propagate(theta, x); });
+    }
   }
   template <class Step>
   Vector propagateMean(const Step& step, const Vector& mean) {
@@ -218,25 +235,26 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   // with one ξ (the paper) or, in the automatic modes, T and one ξ per parameter from the sensitivities.
   Status correctParameters(const typename Base::CorrectionOf& c) {
     const Settings& s = c.settings;
-    if (automatic_) {
-      const Scalar memory = s.adaptiveScaling ? s.convergenceTime : std::numeric_limits<Scalar>::infinity();
-      const Scalar updates = s.adaptiveScaling ? s.minimumMemoryUpdates : std::numeric_limits<Scalar>::infinity();
-      const auto measure = [&c](const State& x, const Param& theta) {
-        return measureModel(c.model, x, c.input, theta);
-      };
-      if (!sensitivity_.correct(c.priorMean, parameters_, measure, c.gainFactor, c.innovationFactor, memory, updates,
-                                c.present))
-        return Status::NonFiniteResult;
+    if constexpr (Automatic) {
+      if (automatic_) {
+        const Scalar memory = s.adaptiveScaling ? s.convergenceTime : std::numeric_limits<Scalar>::infinity();
+        const Scalar updates = s.adaptiveScaling ? s.minimumMemoryUpdates : std::numeric_limits<Scalar>::infinity();
+        const auto measure = [&c](const State& x, const Param& theta) {
+          return measureModel(c.model, x, c.input, theta);
+        };
+        if (!sensitivity_.correct(c.priorMean, parameters_, measure, c.gainFactor, c.innovationFactor, memory, updates,
+                                  c.present))
+          return Status::NonFiniteResult;
+      }
     }
-    if (s.automaticTransformation)
-      sensitivity_.transformation(candidateTransformation_);
-    else
-      candidateTransformation_ = s.transformation;
+    // T and ξ as set, or in the automatic modes from the sensitivities, which overwrite every entry.
+    candidateTransformation_ = s.transformation;
+    if constexpr (Automatic)
+      if (s.automaticTransformation) sensitivity_.transformation(candidateTransformation_);
     if (c.present && !s.automaticTransformation) reduceToPresent(*c.present);
-    if (s.adaptiveScaling)
-      sensitivity_.scaling(candidateTransformation_, c.innovationFactor, candidateScalings_);
-    else
-      candidateScalings_ = s.scaling;
+    candidateScalings_ = s.scaling;
+    if constexpr (Automatic)
+      if (s.adaptiveScaling) sensitivity_.scaling(candidateTransformation_, c.innovationFactor, candidateScalings_);
 
     for (int i = 0; i < Count; ++i) {  // y − Yᵢ; a missing y(j) may be NaN: overwrite, never multiply by 0
       errors_.col(i) = c.y - c.measured.col(i);
@@ -257,20 +275,25 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   void constrainMean(Vector&) {}
 
   void commitPrediction() {
-    if (!automatic_) return;
-    sensitivity_.commitPrediction();
-    ++timeUpdates_;
+    if constexpr (Automatic) {
+      if (!automatic_) return;
+      sensitivity_.commitPrediction();
+      ++timeUpdates_;
+    }
   }
   void commitCorrection() {
     parameters_ = candidateParameters_;
     parameterPoints_ = candidateParameterPoints_;
-    if (!automatic_) return;
-    sensitivity_.commitCorrection();
-    transformation_ = candidateTransformation_;
-    scalings_ = candidateScalings_;
+    if constexpr (Automatic) {
+      if (!automatic_) return;
+      sensitivity_.commitCorrection();
+      transformation_ = candidateTransformation_;
+      scalings_ = candidateScalings_;
+    }
   }
-  void commitOpenLoop(Scalar interval) {
-    if (automatic_) sensitivity_.commitOpenLoop(interval);
+  void commitOpenLoop([[maybe_unused]] Scalar interval) {
+    if constexpr (Automatic)
+      if (automatic_) sensitivity_.commitOpenLoop(interval);
   }
 
  private:
@@ -295,13 +318,20 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   ParamPoints candidateParameterPoints_ = ParamPoints::Zero();
   Eigen::Matrix<Scalar, MeasDim, Count> errors_ = Eigen::Matrix<Scalar, MeasDim, Count>::Zero();  // y − Yᵢ
   ParamPoints steps_ = ParamPoints::Zero();                                                       // ξ T (y − Yᵢ)
-  // The automatic modes (committed with the parameters).
-  Sensitivity sensitivity_;
-  long timeUpdates_ = 0;
-  Transformation transformation_ = Transformation::Zero();
-  Param scalings_ = Param::Zero();
+  // The automatic modes (committed with the parameters); absent when they are compiled out.
+  MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<Sensitivity, 1> sensitivity_;
+  MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<long, 2> timeUpdates_{0};
+  MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<Transformation, 3> transformation_{Transformation::Zero()};
+  MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<Param, 4> scalings_{Param::Zero()};
   Transformation candidateTransformation_ = Transformation::Zero();
   Param candidateScalings_ = Param::Zero();
+};
+
+// The policy with the filter's features bound: the engine takes a policy of four arguments.
+template <class Features>
+struct ModifiedJointParametersWith {
+  template <class Model, class Integrator, class Settings, class Est>
+  using Policy = ModifiedJointParameters<Model, Integrator, Settings, Est, Features>;
 };
 
 }  // namespace detail
@@ -328,13 +358,14 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
 ///
 /// Template arguments: docs/design.md, "Template arguments of every filter"; the sigma-point set must
 /// have 2n + 1 points. Eqs. 9–10 touch no covariance, so they are the same in both covariance forms.
+/// `Without<feature::AutomaticModes>` (features.hpp) compiles the automatic modes out.
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled,
-          class Form = FullCovariance>
+          class Form = FullCovariance, class Features = AllFeatures>
 class ModifiedJointUkf
     : public detail::EngineOf<
-          ModifiedJointUkf<Model_, Integrator_, PointSet, Form>, Model_, Integrator_,
+          ModifiedJointUkf<Model_, Integrator_, PointSet, Form, Features>, Model_, Integrator_,
           ModifiedJointUkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::ParamDim, Model_::MeasDim>,
-          detail::ModifiedJointParameters, Model_::StateDim, PointSet, Form> {
+          detail::ModifiedJointParametersWith<Features>::template Policy, Model_::StateDim, PointSet, Form, Features> {
   static_assert(checkModel<Model_, 1>());
   using Engine = typename ModifiedJointUkf::UnscentedEngine;
   friend Engine;
@@ -366,6 +397,13 @@ class ModifiedJointUkf
   static SettingsError validate(const State& initialState, const Param& initialParameters, const Settings& settings) {
     if (SettingsError e = detail::checkInitialValues(kOwner, initialState, initialParameters, settings.parameterBounds))
       return e;
+    if constexpr (!Features::automaticModes) {
+      constexpr const char* compiledOut =
+          "must be false: the filter is compiled without its automatic modes "
+          "(mjukf::Without<mjukf::feature::AutomaticModes>)";
+      if (settings.automaticTransformation) return detail::invalid(kOwner, "automaticTransformation", compiledOut);
+      if (settings.adaptiveScaling) return detail::invalid(kOwner, "adaptiveScaling", compiledOut);
+    }
     if (SettingsError e = detail::requireFinite(kOwner, "scaling (xi)", settings.scaling)) return e;
     if (SettingsError e = detail::requireFinite(kOwner, "transformation (T)", settings.transformation)) return e;
     if (SettingsError e = detail::requireFinite(kOwner, "parameterSpread (p_theta)", settings.parameterSpread))
@@ -397,17 +435,27 @@ class ModifiedJointUkf
   /// T of the last measurement update (with `automaticTransformation`, from the sensitivities; zero
   /// before the first update), else the setting.
   const Transformation& transformation() const {
-    return this->settings_.automaticTransformation ? this->policy_.lastTransformation()
-                                                   : this->settings_.transformation;
+    if constexpr (Features::automaticModes)
+      if (this->settings_.automaticTransformation) return this->policy_.lastTransformation();
+    return this->settings_.transformation;
   }
   /// ξ of the last measurement update, per parameter (with `adaptiveScaling`; zero before the first
   /// update), else the setting for every parameter.
   Param scalings() const {
-    return this->settings_.adaptiveScaling ? this->policy_.lastScalings() : Param(this->settings_.scaling);
+    if constexpr (Features::automaticModes)
+      if (this->settings_.adaptiveScaling) return this->policy_.lastScalings();
+    return Param(this->settings_.scaling);
   }
   /// What the automatic modes know (W = ∂x̂/∂θ̂, ψ = ∂ŷ/∂θ̂ of the last update, the information about
-  /// θ); not followed, and zero, when neither mode is on.
-  const Sensitivity& sensitivity() const { return this->policy_.sensitivity(); }
+  /// θ); not followed, and zero, when neither mode is on. Not available in a filter compiled
+  /// `Without<feature::AutomaticModes>`.
+  template <class F = Features>
+  const Sensitivity& sensitivity() const {
+    static_assert(F::automaticModes,
+                  "this ModifiedJointUkf is compiled without its automatic modes "
+                  "(mjukf::Without<mjukf::feature::AutomaticModes>): sensitivity() is not available");
+    return this->policy_.sensitivity();
+  }
 
   /// Starts again from (state, covariance), keeping θ̂ and the θᵢ (and, in the automatic modes, the
   /// information about θ; the new state does not depend on θ̂, W = 0). When one is not finite or the

@@ -83,10 +83,10 @@ class KnownParameters : public ParameterPolicy<Model, Integrator, Settings, Est>
 ///
 /// Template arguments: docs/design.md, "Template arguments of every filter".
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled,
-          class Form = FullCovariance>
-class Ukf : public detail::EngineOf<Ukf<Model_, Integrator_, PointSet, Form>, Model_, Integrator_,
+          class Form = FullCovariance, class Features = AllFeatures>
+class Ukf : public detail::EngineOf<Ukf<Model_, Integrator_, PointSet, Form, Features>, Model_, Integrator_,
                                     UkfSettings<typename Model_::Scalar, Model_::StateDim, Model_::MeasDim>,
-                                    detail::KnownParameters, Model_::StateDim, PointSet, Form> {
+                                    detail::KnownParameters, Model_::StateDim, PointSet, Form, Features> {
   static_assert(checkModel<Model_>());
   using Engine = typename Ukf::UnscentedEngine;
   friend Engine;

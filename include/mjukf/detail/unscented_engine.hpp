@@ -23,6 +23,7 @@
 #include "mjukf/detail/linear_algebra.hpp"
 #include "mjukf/detail/validation.hpp"
 #include "mjukf/diagnostics.hpp"
+#include "mjukf/features.hpp"
 #include "mjukf/filter_settings.hpp"
 #include "mjukf/health.hpp"
 #include "mjukf/measurement_gating.hpp"
@@ -832,12 +833,14 @@ constexpr bool hasParameterBounds<Settings, std::void_t<decltype(std::declval<co
 /// The per-step calls every filter shares: `Ukf`, `JointUkf`, `ModifiedJointUkf` and `DualUkf` derive
 /// from this engine and inherit its public members. Each call returns a Status; one other than Ok or
 /// Repaired leaves the filter exactly as it was (docs/robustness.md). `L` is the dimension of the
-/// vector the filter draws sigma points for; `Policy` is how it estimates parameters (section 3 above).
+/// vector the filter draws sigma points for; `Policy` is how it estimates parameters (section 3 above);
+/// `Features` what is compiled in (features.hpp).
 template <class Filter, class Model_, class Integrator_, class Settings_, class Policy, int L,
-          class PointSet = MerweScaled, class Form = FullCovariance>
+          class PointSet = MerweScaled, class Form = FullCovariance, class Features_ = AllFeatures>
 class UnscentedEngine {
   static_assert(!isDiscreteTime<Model_> || std::is_same_v<Integrator_, NoIntegrator<typename Model_::Scalar>>,
                 "a discrete-time model (it has transition()) is not integrated: leave the integrator out");
+  static_assert(isFeatureSet<Features_>, "the features are AllFeatures or mjukf::Without<...> (features.hpp)");
 
  public:
   /// The model type (model.hpp).
@@ -872,6 +875,8 @@ class UnscentedEngine {
   static constexpr int SigmaPointCount = SigmaPoints::Count;
   /// The covariance form: `FullCovariance` or `SquareRootCovariance` (covariance_form.hpp).
   using CovarianceForm = Form;
+  /// What is compiled in: `AllFeatures` or `Without<…>` (features.hpp).
+  using Features = Features_;
 
   /// Unscented time update (docs/algorithms.md §2) from t over `steps` steps of size h, with the
   /// model's input signal u(t) evaluated at every stage time (once per distinct stage time, shared by
@@ -955,12 +960,31 @@ class UnscentedEngine {
   /// measurement updates passed its tests and no streak of refusals is under way, otherwise the alarm.
   /// The first alarm since construction, `reset` or `clearHealth()` stays in
   /// `healthStatistics().firstAlarm`, with the update that raised it.
-  Health health() const { return health_.health(); }
+  /// Not available in a filter compiled `Without<feature::HealthMonitor>`.
+  template <class F = Features>
+  Health health() const {
+    static_assert(F::healthMonitor,
+                  "this filter is compiled without its health monitor (mjukf::Without<mjukf::feature::HealthMonitor>): "
+                  "health(), healthStatistics() and clearHealth() are not available");
+    if constexpr (F::healthMonitor) return health_.health();
+  }
   /// The statistics behind `health()`: the first alarm, the last block's normalised NIS and
   /// autocorrelation against their bounds, the parameters' motion, counts of blocks, alarms and refusals.
-  const HealthStatistics<Scalar>& healthStatistics() const { return health_.statistics(); }
+  template <class F = Features>
+  const HealthStatistics<Scalar>& healthStatistics() const {
+    static_assert(F::healthMonitor,
+                  "this filter is compiled without its health monitor (mjukf::Without<mjukf::feature::HealthMonitor>): "
+                  "health(), healthStatistics() and clearHealth() are not available");
+    if constexpr (F::healthMonitor) return health_.statistics();
+  }
   /// Clears the first alarm (after the user acted on it); the statistics go on.
-  void clearHealth() { health_.clearAlarm(); }
+  template <class F = Features>
+  void clearHealth() {
+    static_assert(F::healthMonitor,
+                  "this filter is compiled without its health monitor (mjukf::Without<mjukf::feature::HealthMonitor>): "
+                  "health(), healthStatistics() and clearHealth() are not available");
+    if constexpr (F::healthMonitor) health_.clearAlarm();
+  }
 
   /// The filter built from these initial values and settings, or the SettingsError naming the first
   /// invalid one (Filter::validate): the way to build a filter without exceptions (docs/embedded.md).
@@ -1016,7 +1040,13 @@ class UnscentedEngine {
     if (SettingsError e = requirePositiveDefinite(owner, "measurementNoise (R)", settings.measurementNoise)) return e;
     if (SettingsError e = validateRepair(owner, settings.repair)) return e;
     if (SettingsError e = validateStepCheck(owner, settings.stepCheck)) return e;
-    if (SettingsError e = validateHealth(owner, settings.health)) return e;
+    if constexpr (Features::healthMonitor) {
+      if (SettingsError e = validateHealth(owner, settings.health)) return e;
+    } else if (settings.health.enabled) {
+      return invalid(owner, "health.enabled",
+                     "must be false: the filter is compiled without its health monitor "
+                     "(mjukf::Without<mjukf::feature::HealthMonitor>)");
+    }
     return validateGate(owner, settings.gate);
   }
 
@@ -1042,7 +1072,7 @@ class UnscentedEngine {
   // Commits a reset that checkResetCovariance() accepted: cannot fail.
   void resetEstimate(const Vector& mean, const Matrix& covariance) {
     estimate_.assign(mean, covariance);
-    health_.clear();
+    if constexpr (Features::healthMonitor) health_.clear();
   }
   // The start time of a new pass over a record (startPass()), checked like an initial value.
   static SettingsError checkStartTime(const char* owner, Scalar startTime) {
@@ -1051,7 +1081,7 @@ class UnscentedEngine {
   // A new pass starts at the record's t₀: time() is where the next measurement's input is read.
   void restartTime(Scalar startTime) {
     time_ = startTime;
-    health_.restartBlock();
+    if constexpr (Features::healthMonitor) health_.restartBlock();
   }
 
   // ---- The skeleton --------------------------------------------------------------------------------
@@ -1153,7 +1183,7 @@ class UnscentedEngine {
   template <class InputSource>
   Status timeUpdateWith(const InputSource& input, Scalar t, Scalar h, int steps) {
     const Status status = timeUpdateUnmonitored(input, t, h, steps);
-    health_.observeStatus(status, CallKind::Propagation);
+    observeStatus(status, CallKind::Propagation);
     return status;
   }
   template <class InputSource>
@@ -1192,7 +1222,7 @@ class UnscentedEngine {
   template <class InputSource>
   Status propagateMeanWith(const InputSource& input, Scalar t, Scalar h, int steps) {
     const Status status = propagateMeanUnmonitored(input, t, h, steps);
-    health_.observeStatus(status, CallKind::Propagation);
+    observeStatus(status, CallKind::Propagation);
     return status;
   }
   template <class InputSource>
@@ -1230,7 +1260,7 @@ class UnscentedEngine {
   // one calls correctState). The input reaches g, and is checked, only when the measurement takes it.
   Status updateWithInput(const Meas& y, const Input& u, const Mask* present) {
     const Status status = updateUnmonitored(y, u, present);
-    health_.observeStatus(status, CallKind::Measurement);
+    observeStatus(status, CallKind::Measurement);
     if (taken(status)) observeCommittedUpdate(present);
     return status;
   }
@@ -1241,9 +1271,16 @@ class UnscentedEngine {
     return policy_.update(static_cast<Filter&>(*this), y, u, present);
   }
 
+  // Every call's outcome, for the health monitor's refusal streaks.
+  void observeStatus(Status status, CallKind kind) {
+    if constexpr (Features::healthMonitor) health_.observeStatus(status, kind);
+  }
   // What the health monitor sees of a committed update: its diagnostics, and the parameters with
   // their standard deviations (where the filter has a covariance of them) and bounds.
   void observeCommittedUpdate(const Mask* present) {
+    if constexpr (Features::healthMonitor) observeCommittedUpdateMonitored(present);
+  }
+  void observeCommittedUpdateMonitored(const Mask* present) {
     if (!settings_.health.enabled) return;
     const Filter& filter = static_cast<const Filter&>(*this);
     const Diagnostics& d = estimate_.diagnostics();
@@ -1298,7 +1335,10 @@ class UnscentedEngine {
   Est estimate_;
   Policy policy_;
   Scalar time_ = 0;  // where the last time update or open-loop propagation ended
-  HealthMonitor<Scalar, MeasDim, ParamDim> health_;
+  // The health monitor, absent when it is compiled out.
+  using MonitorOrAbsent =
+      std::conditional_t<Features::healthMonitor, HealthMonitor<Scalar, MeasDim, ParamDim>, Absent<>>;
+  MJUKF_NO_UNIQUE_ADDRESS MonitorOrAbsent health_;
   // The last request (h, steps) the step check passed, the halvings it needed, and the calls since.
   Scalar checkedStepSize_ = 0;
   int checkedStepCount_ = 0;
@@ -1332,11 +1372,12 @@ class UnscentedEngine {
 // model, stepper, settings and estimate) and an estimate of dimension L drawn with `PointSet`, in the
 // covariance form `Form`.
 template <class Filter, class Model, class Integrator, class Settings,
-          template <class, class, class, class> class PolicyOf, int L, class PointSet, class Form>
+          template <class, class, class, class> class PolicyOf, int L, class PointSet, class Form,
+          class Features = AllFeatures>
 using EngineOf = UnscentedEngine<
     Filter, Model, Integrator, Settings,
     PolicyOf<Model, Integrator, Settings, Estimate<typename Model::Scalar, L, Model::MeasDim, PointSet, Form>>, L,
-    PointSet, Form>;
+    PointSet, Form, Features>;
 
 /// \endcond
 
