@@ -11,6 +11,7 @@
 #include "mjukf/covariance_repair.hpp"
 #include "mjukf/diagnostics.hpp"
 #include "mjukf/dual_ukf.hpp"
+#include "mjukf/features.hpp"
 #include "mjukf/filter_settings.hpp"
 #include "mjukf/integrators/integrators.hpp"
 #include "mjukf/joint_ukf.hpp"
