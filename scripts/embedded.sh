@@ -10,8 +10,11 @@
 #   4. compares its float estimates with those of the host build of the same program
 #      (<host-build-dir>/examples/embedded/mjukf_embedded_host, built if missing) to the tolerance of
 #      docs/embedded.md: per filter and component, 4 × the largest |host float − host double| over the
-#      run, plus 2 ulp.
-# --figures also builds every variant at -O2 and -Os and prints the tables of docs/embedded.md.
+#      run, plus 2 ulp;
+#   5. does 2–3 for the same filters compiled without the health monitor and the MJUKF's automatic
+#      modes (robot_all_lean, features.hpp), and requires their estimates to be those of step 3 bit for bit.
+# --figures also builds every variant at -O2 and -Os, with every feature and without the optional
+# ones, and prints the tables of docs/embedded.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 host=${1:?usage: scripts/embedded.sh <host-build-dir> [--figures]}
@@ -102,23 +105,41 @@ cmake --build "$host" -j "$jobs" --target mjukf_embedded_host
 "$host/examples/embedded/mjukf_embedded_host" >"$out/host.txt"
 compare_runs "$out/target.txt" "$out/host.txt"
 
+echo "== firmware without the health monitor and the automatic modes (-O2): symbols, run, the same estimates"
+build_firmware "$out/O2" -O2 robot_all_lean
+check_symbols "$out/O2/robot_all_lean.elf"
+run_firmware "$out/O2/robot_all_lean.elf" "$out/target-lean.txt" ||
+  { cat "$out/target-lean.txt"; echo "error: the firmware without the optional features failed" >&2; exit 1; }
+grep '^fig' "$out/target-lean.txt" | sed 's/^fig /fig lean /'
+if ! cmp -s <(grep '^est' "$out/target.txt") <(grep '^est' "$out/target-lean.txt"); then
+  diff <(grep '^est' "$out/target.txt") <(grep '^est' "$out/target-lean.txt") | head -5
+  echo "error: the filters without the optional features estimated otherwise" >&2
+  exit 1
+fi
+echo "the same $(grep -c '^est' "$out/target.txt") estimate rows, bit for bit"
+
 [ "$figures" = --figures ] || exit 0
 
 echo "== figures: flash of each filter (image minus the plant-only image), -O2 and -Os"
 filters="ukf jukf mjukf dual ukf_sr jukf_sr mjukf_sr dual_sr"
-build_firmware "$out/Os" -Os robot_all robot_none $(printf 'robot_%s ' $filters)
-build_firmware "$out/O2" -O2 robot_none $(printf 'robot_%s ' $filters)
+# Every filter with every feature, without the optional ones (_lean), and the MJUKF with the monitor
+# but without the automatic modes (_fixed).
+variants="$filters $(printf '%s_lean ' $filters) mjukf_fixed mjukf_sr_fixed"
+build_firmware "$out/Os" -Os robot_all robot_all_lean robot_none $(printf 'robot_%s ' $variants)
+build_firmware "$out/O2" -O2 robot_none $(printf 'robot_%s ' $variants)
 run_firmware "$out/Os/robot_all.elf" "$out/target-Os.txt"
+run_firmware "$out/Os/robot_all_lean.elf" "$out/target-lean-Os.txt"
 for opt in O2 Os; do
   base=$(arm-none-eabi-size "$out/$opt/robot_none.elf" | awk 'NR == 2 { print $1 + $2 }')
   echo "-$opt: plant-only image $base B (text + data)"
-  for f in $filters all; do
+  for f in $variants all all_lean; do
     size=$(arm-none-eabi-size "$out/$opt/robot_$f.elf" | awk 'NR == 2 { print $1 + $2 }')
     echo "  $f: $size B, own cost $((size - base)) B"
   done
 done
-echo "== figures: per filter, from the runs (-O2, then -Os)"
-for run in target target-Os; do
+echo "== figures: per filter, from the runs (-O2, then -Os; every feature, then without the optional ones)"
+for run in target target-Os target-lean target-lean-Os; do
+  echo " $run:"
   awk '$1 == "clock" { perTick = $3 / $5 }
        $1 == "fig" { printf "  %-8s sizeof %5d B  stack %4d B  instructions/measurement step %6.0f  /open-loop step %5.0f\n",
                      $3, $5, $15, $7 * perTick / $9, $11 * perTick / $13 }

@@ -3,7 +3,7 @@
 //
 // For each filter built in (EMBEDDED_FILTERS, a bit per filter, the four in the full and in the
 // square-root covariance form; 0 builds the plant simulation alone, the baseline the flash figures
-// subtract), the program
+// subtract), with the features EMBEDDED_WITHOUT leaves out (features.hpp; none by default), the program
 //   1. asks the factory for a filter with a broken R and checks that it names the setting (the
 //      exception-free validation path, on the target);
 //   2. builds the filter with the robot's settings (examples/support/paper/experiments.hpp) by create();
@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <cstring>
 
+#include "mjukf/features.hpp"
 #include "mjukf/simulation.hpp"
 #include "paper/experiments.hpp"
 #include "paper/schedule.hpp"
@@ -32,8 +33,25 @@
 // 1 UKF, 2 JUKF, 4 MJUKF, 8 dual UKF; 16, 32, 64, 128 the same four in the square-root covariance form
 #define EMBEDDED_FILTERS 255
 #endif
+#ifndef EMBEDDED_WITHOUT
+// What every filter of the image is compiled without: 1 the health monitor, 2 the MJUKF's automatic
+// modes, 3 both; 0 nothing (the default).
+#define EMBEDDED_WITHOUT 0
+#endif
 
 namespace {
+
+// The filters' last template argument (features.hpp): what a firmware that uses neither the health
+// monitor nor the automatic modes writes is the first.
+#if EMBEDDED_WITHOUT == 3
+using Features = mjukf::Without<mjukf::feature::HealthMonitor, mjukf::feature::AutomaticModes>;
+#elif EMBEDDED_WITHOUT == 2
+using Features = mjukf::Without<mjukf::feature::AutomaticModes>;
+#elif EMBEDDED_WITHOUT == 1
+using Features = mjukf::Without<mjukf::feature::HealthMonitor>;
+#else
+using Features = mjukf::AllFeatures;
+#endif
 
 constexpr long kRows = 20001;       // 20 s at h = 1 ms, row 0 the initial estimate
 constexpr long kPrintEvery = 1000;  // one estimate line a second
@@ -194,6 +212,14 @@ bool runFilter(const char* name, const typename Filter::Param& initialParameters
   using Experiment = mjukf::paper::FlexibleJointExperiment<Scalar>;
   using Model = typename Experiment::Model;
 
+  // A filter without the health monitor is refused unless its settings say it is off (on by default).
+  if constexpr (!Features::healthMonitor) {
+    if (settings.health.enabled) {
+      Settings unmonitored = settings;
+      unmonitored.health.enabled = false;
+      return runFilter<Scalar, Filter>(name, initialParameters, unmonitored);
+    }
+  }
   Settings broken = settings;
   broken.measurementNoise(0, 0) = Scalar(-1);
   const auto refused = Filter::create(Model(), Experiment::initialState(), initialParameters, broken);
@@ -254,29 +280,32 @@ template <class Scalar>
 bool runAll() {
   using Experiment = mjukf::paper::FlexibleJointExperiment<Scalar>;
   using Model = typename Experiment::Model;
+  using Stepper = mjukf::DefaultIntegrator<Model>;
+  using mjukf::MerweScaled, mjukf::FullCovariance, mjukf::SquareRootCovariance;
   bool ok = true;
   if constexpr ((EMBEDDED_FILTERS & 1) != 0)
-    ok &= runFilter<Scalar, mjukf::Ukf<Model>>("ukf", Model::trueParameters(), Experiment::ukf());
+    ok &= runFilter<Scalar, mjukf::Ukf<Model, Stepper, MerweScaled, FullCovariance, Features>>(
+        "ukf", Model::trueParameters(), Experiment::ukf());
   if constexpr ((EMBEDDED_FILTERS & 2) != 0)
-    ok &= runFilter<Scalar, mjukf::JointUkf<Model>>("jukf", Experiment::initialParameters(), Experiment::jointUkf());
+    ok &= runFilter<Scalar, mjukf::JointUkf<Model, Stepper, MerweScaled, FullCovariance, Features>>(
+        "jukf", Experiment::initialParameters(), Experiment::jointUkf());
   if constexpr ((EMBEDDED_FILTERS & 4) != 0)
-    ok &= runFilter<Scalar, mjukf::ModifiedJointUkf<Model>>("mjukf", Experiment::initialParameters(),
-                                                            Experiment::modifiedJointUkf());
+    ok &= runFilter<Scalar, mjukf::ModifiedJointUkf<Model, Stepper, MerweScaled, FullCovariance, Features>>(
+        "mjukf", Experiment::initialParameters(), Experiment::modifiedJointUkf());
   if constexpr ((EMBEDDED_FILTERS & 8) != 0)
-    ok &= runFilter<Scalar, mjukf::DualUkf<Model>>("dual", Experiment::initialParameters(), Experiment::dualUkf());
-  using Stepper = mjukf::DefaultIntegrator<Model>;
-  using mjukf::MerweScaled, mjukf::SquareRootCovariance;
+    ok &= runFilter<Scalar, mjukf::DualUkf<Model, Stepper, MerweScaled, FullCovariance, Features>>(
+        "dual", Experiment::initialParameters(), Experiment::dualUkf());
   if constexpr ((EMBEDDED_FILTERS & 16) != 0)
-    ok &= runFilter<Scalar, mjukf::Ukf<Model, Stepper, MerweScaled, SquareRootCovariance>>(
+    ok &= runFilter<Scalar, mjukf::Ukf<Model, Stepper, MerweScaled, SquareRootCovariance, Features>>(
         "ukf_sr", Model::trueParameters(), Experiment::ukf());
   if constexpr ((EMBEDDED_FILTERS & 32) != 0)
-    ok &= runFilter<Scalar, mjukf::JointUkf<Model, Stepper, MerweScaled, SquareRootCovariance>>(
+    ok &= runFilter<Scalar, mjukf::JointUkf<Model, Stepper, MerweScaled, SquareRootCovariance, Features>>(
         "jukf_sr", Experiment::initialParameters(), Experiment::jointUkf());
   if constexpr ((EMBEDDED_FILTERS & 64) != 0)
-    ok &= runFilter<Scalar, mjukf::ModifiedJointUkf<Model, Stepper, MerweScaled, SquareRootCovariance>>(
+    ok &= runFilter<Scalar, mjukf::ModifiedJointUkf<Model, Stepper, MerweScaled, SquareRootCovariance, Features>>(
         "mjukf_sr", Experiment::initialParameters(), Experiment::modifiedJointUkf());
   if constexpr ((EMBEDDED_FILTERS & 128) != 0)
-    ok &= runFilter<Scalar, mjukf::DualUkf<Model, Stepper, MerweScaled, SquareRootCovariance>>(
+    ok &= runFilter<Scalar, mjukf::DualUkf<Model, Stepper, MerweScaled, SquareRootCovariance, Features>>(
         "dual_sr", Experiment::initialParameters(), Experiment::dualUkf());
   if constexpr (EMBEDDED_FILTERS == 0) {  // the baseline: the plant and the output alone
     Plant<Scalar> plant;

@@ -1183,7 +1183,7 @@ class UnscentedEngine {
   template <class InputSource>
   Status timeUpdateWith(const InputSource& input, Scalar t, Scalar h, int steps) {
     const Status status = timeUpdateUnmonitored(input, t, h, steps);
-    observeStatus(status, CallKind::Propagation);
+    if constexpr (Features::healthMonitor) health_.observeStatus(status, CallKind::Propagation);
     return status;
   }
   template <class InputSource>
@@ -1222,7 +1222,7 @@ class UnscentedEngine {
   template <class InputSource>
   Status propagateMeanWith(const InputSource& input, Scalar t, Scalar h, int steps) {
     const Status status = propagateMeanUnmonitored(input, t, h, steps);
-    observeStatus(status, CallKind::Propagation);
+    if constexpr (Features::healthMonitor) health_.observeStatus(status, CallKind::Propagation);
     return status;
   }
   template <class InputSource>
@@ -1260,8 +1260,10 @@ class UnscentedEngine {
   // one calls correctState). The input reaches g, and is checked, only when the measurement takes it.
   Status updateWithInput(const Meas& y, const Input& u, const Mask* present) {
     const Status status = updateUnmonitored(y, u, present);
-    observeStatus(status, CallKind::Measurement);
-    if (taken(status)) observeCommittedUpdate(present);
+    if constexpr (Features::healthMonitor) {
+      health_.observeStatus(status, CallKind::Measurement);
+      if (taken(status)) observeCommittedUpdate(present);
+    }
     return status;
   }
   Status updateUnmonitored(const Meas& y, const Input& u, const Mask* present) {
@@ -1271,16 +1273,9 @@ class UnscentedEngine {
     return policy_.update(static_cast<Filter&>(*this), y, u, present);
   }
 
-  // Every call's outcome, for the health monitor's refusal streaks.
-  void observeStatus(Status status, CallKind kind) {
-    if constexpr (Features::healthMonitor) health_.observeStatus(status, kind);
-  }
   // What the health monitor sees of a committed update: its diagnostics, and the parameters with
   // their standard deviations (where the filter has a covariance of them) and bounds.
   void observeCommittedUpdate(const Mask* present) {
-    if constexpr (Features::healthMonitor) observeCommittedUpdateMonitored(present);
-  }
-  void observeCommittedUpdateMonitored(const Mask* present) {
     if (!settings_.health.enabled) return;
     const Filter& filter = static_cast<const Filter&>(*this);
     const Diagnostics& d = estimate_.diagnostics();
