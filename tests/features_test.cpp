@@ -16,6 +16,26 @@
 #include "mjukf/mjukf.hpp"
 #include "paper/experiments.hpp"
 
+// Every member of the filters without the optional features compiles, for float and double (a member
+// never called is otherwise never compiled).
+namespace mjukf {
+using FeaturesTestLean = Without<feature::HealthMonitor, feature::AutomaticModes>;
+#define MJUKF_INSTANTIATE_WITHOUT_FEATURES(Scalar)                                                                    \
+  template class Ukf<paper::FlexibleJointExperiment<Scalar>::Model, ITrBdf2<Scalar>, MerweScaled, FullCovariance,     \
+                     FeaturesTestLean>;                                                                               \
+  template class JointUkf<paper::FlexibleJointExperiment<Scalar>::Model, ITrBdf2<Scalar>, MerweScaled,                \
+                          SquareRootCovariance, FeaturesTestLean>;                                                    \
+  template class ModifiedJointUkf<paper::FlexibleJointExperiment<Scalar>::Model, ITrBdf2<Scalar>, MerweScaled,        \
+                                  FullCovariance, FeaturesTestLean>;                                                  \
+  template class ModifiedJointUkf<paper::FlexibleJointExperiment<Scalar>::Model, ITrBdf2<Scalar>, MerweScaled,        \
+                                  SquareRootCovariance, Without<feature::AutomaticModes>>;                            \
+  template class DualUkf<paper::FlexibleJointExperiment<Scalar>::Model, ITrBdf2<Scalar>, MerweScaled, FullCovariance, \
+                         Without<feature::HealthMonitor>>;
+MJUKF_INSTANTIATE_WITHOUT_FEATURES(float)
+MJUKF_INSTANTIATE_WITHOUT_FEATURES(double)
+#undef MJUKF_INSTANTIATE_WITHOUT_FEATURES
+}  // namespace mjukf
+
 namespace {
 
 using mjukf::FullCovariance;
