@@ -1,7 +1,7 @@
 #pragma once
 
 /// \file
-/// The covariance form of a filter, its last template argument (after the sigma-point set): what a
+/// The covariance form of a filter, its template argument after the sigma-point set: what a
 /// step propagates to describe the estimate's spread, the covariance P itself (`FullCovariance`, the
 /// default) or its lower triangular square root S, P = S Sᵀ (`SquareRootCovariance`).
 /// docs/algorithms.md §10 derives the square-root form; docs/design.md says how to choose.

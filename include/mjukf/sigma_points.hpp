@@ -3,7 +3,7 @@
 /// \file
 /// The sigma-point sets a filter can draw (docs/algorithms.md §1): van der Merwe's scaled set, the
 /// default, and the spherical-radial cubature set of the cubature Kalman filter. A set is a policy of
-/// the filters (their last template argument): its size, its weights and the spread γ of its points
+/// the filters (their third template argument): its size, its weights and the spread γ of its points
 /// about the mean, all fixed at construction. Both sets here are symmetric (x̂ ± γ Sᵢ for the columns
 /// Sᵢ of a factor of P, with or without x̂ itself), and a step draws them with
 /// detail::drawSymmetricPoints (detail/linear_algebra.hpp).
