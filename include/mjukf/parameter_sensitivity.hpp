@@ -105,6 +105,7 @@ class ParameterSensitivity {
       theta(r) += delta;
       const State perturbed = propagate(State(x0 + delta * state_.col(r)), theta);
       const State d = (perturbed - x0Propagated) / delta;  // A Wᵣ + Bᵣ
+      derivative_.col(r) = detail::allFinite(d) ? d : state_.col(r);
       if (detail::allFinite(d)) candidateState_.col(r) = state_.col(r) + extrapolation * (d - state_.col(r));
     }
     candidateInterval_ = interval;
@@ -250,6 +251,14 @@ class ParameterSensitivity {
   /// how much is known, and a weight on it would cancel in the step once the data outweigh the prior.
   Scalar weight() const { return weight_; }
 
+  /// ψ of the measurement update in progress (after `correct`, before `commitCorrection`).
+  const MeasSensitivity& candidateMeasurementSensitivity() const { return candidateMeasurement_; }
+  /// W of the step in progress (after `predict` or `correct`, before its commit).
+  const StateSensitivity& candidateStateSensitivity() const { return candidateState_; }
+  /// D = A W + B of the last `predict`, over its interval alone (a column whose difference was not
+  /// finite: W's).
+  const StateSensitivity& derivative() const { return derivative_; }
+
   /// W = ∂x̂/∂θ̂ of the last committed update.
   const StateSensitivity& stateSensitivity() const { return state_; }
   /// ψ = ∂ŷ/∂θ̂ of the last measurement update.
@@ -269,6 +278,7 @@ class ParameterSensitivity {
   StateSensitivity candidateState_ = StateSensitivity::Zero();
   MeasSensitivity candidateMeasurement_ = MeasSensitivity::Zero();
   Information candidateInformation_ = Information::Identity();
+  StateSensitivity derivative_ = StateSensitivity::Zero();  // D of the last predict
   Scalar candidateInterval_ = 0;
   bool stale_ = false;  // the last time update did not refresh W: reuse ψ
   bool candidateStale_ = false;
