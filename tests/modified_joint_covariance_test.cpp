@@ -1,4 +1,4 @@
-// The MJUKF's covariance of θ̂ (eq. 16; detail/parameter_error_covariance.hpp, docs/algorithms.md §5):
+// The MJUKF's covariance of θ̂ (detail/parameter_error_covariance.hpp, docs/algorithms.md §5.1):
 // its coverage of the truth over seeds on linear-Gaussian plants, automatic and hand-tuned, and on a
 // nonlinear plant it was not developed on; what an overshooting ξ does to it; that following it
 // changes no estimate; NaN when it is not followed; the passes and resets; float.
@@ -62,7 +62,7 @@ struct DrivenPair {
   Meas measurement(const State& x, const Param&) const { return x; }
 };
 
-// Not used while eq. 16 was developed (the held-out case): a forced oscillator in continuous time,
+// Not used while the covariance was developed (the held-out case): a forced oscillator in continuous time,
 // ẍ = −k x − c ẋ + sin(1.3 t), k and c unknown, the position alone measured every 0.05 s.
 struct ForcedOscillator {
   using Scalar = double;

@@ -103,11 +103,12 @@ struct ModifiedJointUkfSettings : ParameterEstimationSettings<Scalar_, StateDim,
   /// time update (p extra propagations each) and kept in between; 0: once, at the first time update.
   /// Must be ≥ 0, checked even with both modes off.
   int sensitivityInterval = 1;
-  /// true (the default): the filter follows the covariance of θ̂, `parameterCovariance()` (eq. 16,
-  /// docs/algorithms.md §5), from which the health monitor judges the parameters' motion. It needs the
-  /// sensitivities ψ = ∂ŷ/∂θ̂ that the automatic modes follow anyway; with both modes off it costs p
-  /// extra propagations at every `sensitivityInterval`-th time update. false: the paper's MJUKF and its
-  /// cost (the paper presets), and `parameterCovariance()` is NaN, unknown.
+  /// true (the default): the filter follows the covariance of θ̂, `parameterCovariance()`
+  /// (docs/algorithms.md §5.1), from which the health monitor judges the parameters' motion. It needs
+  /// the sensitivities W and ψ that the automatic modes follow anyway; with both modes off it costs p
+  /// extra propagations at every `sensitivityInterval`-th time update, and every measurement update n
+  /// evaluations of g. false: the paper's MJUKF and its cost (the paper presets), and
+  /// `parameterCovariance()` is NaN, unknown.
   bool followParameterCovariance = true;
 };
 
@@ -303,7 +304,7 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   }
 
  private:
-  // Eq. 16 (detail/parameter_error_covariance.hpp) with this update's gains: K = U S⁻¹, G = diag(ξ) T,
+  // The covariance of θ̂ (detail/parameter_error_covariance.hpp) with this update's gains: K = U S⁻¹, G = diag(ξ) T,
   // and H = ∂g/∂x at (x̂⁻, θ̂) by forward differences, one measurement per state.
   template <class Correction>
   bool correctErrorCovariance(const Correction& c) {
@@ -349,7 +350,7 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   Eigen::Matrix<Scalar, MeasDim, Count> errors_ = Eigen::Matrix<Scalar, MeasDim, Count>::Zero();  // y − Yᵢ
   ParamPoints steps_ = ParamPoints::Zero();                                                       // ξ T (y − Yᵢ)
   Transformation gain_ = Transformation::Zero();                                                  // G = diag(ξ) T
-  // Eq. 16: cov(η, θ̂ − θ) (detail/parameter_error_covariance.hpp), and the workspace of its update.
+  // cov((η, θ̂ − θ)) (detail/parameter_error_covariance.hpp), and the workspace of its update.
   detail::ParameterErrorCovariance<Scalar, StateDim, MeasDim, ParamDim> errorCovariance_;
   Points priorPoints_ = Points::Zero();
   Eigen::Matrix<Scalar, MeasDim, StateDim> measurementJacobian_ = Eigen::Matrix<Scalar, MeasDim, StateDim>::Zero();
@@ -467,7 +468,7 @@ class ModifiedJointUkf
   /// What the automatic modes know (W = ∂x̂/∂θ̂, ψ = ∂ŷ/∂θ̂ of the last update, the information about
   /// θ); not followed, and zero, when neither mode is on and `followParameterCovariance` is false.
   const Sensitivity& sensitivity() const { return this->policy_.sensitivity(); }
-  /// P_θ, the covariance of θ̂ (p × p; eq. 16, docs/algorithms.md §5): the first-order covariance of θ̂'s
+  /// P_θ, the covariance of θ̂ (p × p; docs/algorithms.md §5.1): the first-order covariance of θ̂'s
   /// error through the gains this filter used, from the prior diag(sᵣ²), sᵣ the larger of |θ̂₀ᵣ| and
   /// (n + 1)|p_θᵣ|. It takes θ as constant and the model as right; NaN (unknown) when
   /// `followParameterCovariance` and both automatic modes are off.

@@ -1,8 +1,8 @@
 #pragma once
 
 /// \file
-/// The MJUKF's covariance of θ̂ (docs/algorithms.md §5, eq. 16): the first-order covariance of the
-/// joint error (η, e), e = θ̂ − θ and η = x̂ − x − W e the state's error that the parameters' does not
+/// The MJUKF's covariance of θ̂ (docs/algorithms.md §5.1; not in the paper): the first-order covariance
+/// of the joint error (η, e), e = θ̂ − θ and η = x̂ − x − W e the state's error that the parameters' does not
 /// explain (W = ∂x̂/∂θ̂, parameter_sensitivity.hpp), carried through the filter's own steps: its gain
 /// K, its parameter gain G = diag(ξ) T, and the dynamics linearised from its sigma points.
 
