@@ -71,7 +71,8 @@ struct HealthSettings {
   /// of 10⁴ updates (200 blocks) of a consistent filter raises a false alarm with probability ≈ 6e-4.
   Scalar falseAlarmProbability = Scalar(1e-6);
   /// A parameter moving more than this many of its standard deviations within a block is running
-  /// away; > 0. Only filters that report a parameter covariance (JointUkf, DualUkf) run this test.
+  /// away; > 0. Only filters that report a parameter covariance (JointUkf, DualUkf, an MJUKF that
+  /// follows its own) run this test.
   Scalar runawaySigmas = Scalar(10);
   /// Refused calls in a row that raise `RepeatedRefusals`, ≥ 1.
   int refusalStreak = 10;
