@@ -110,8 +110,8 @@ struct Plan {
 };
 
 struct Coverage {
-  double meanNees = 0;                 // mean over runs of (θ̂ − θ)ᵀ P_θ⁻¹ (θ̂ − θ) at the end
-  Eigen::VectorXd covered;             // per parameter: the share of runs with |θ̂ᵣ − θᵣ| ≤ 1.96 σᵣ
+  double meanNees = 0;      // mean over runs of (θ̂ − θ)ᵀ P_θ⁻¹ (θ̂ − θ) at the end
+  Eigen::VectorXd covered;  // per parameter: the share of runs with |θ̂ᵣ − θᵣ| ≤ 1.96 σᵣ
   int runs = 0, alarms = 0;
 };
 
@@ -140,14 +140,16 @@ Coverage coverage(const typename Plant::Param& truth, const typename Plant::Para
       for (int i = 0; i < n; ++i) x(i) += std::sqrt(plan.processNoise) * normal(rng);
       typename Plant::Meas y = plant.measurement(x, truth);
       for (int j = 0; j < m; ++j) y(j) += std::sqrt(plan.measurementNoise) * normal(rng);
-      const bool taken = mjukf::taken(filter.timeUpdate(t, plan.interval / plan.steps, plan.steps)) && mjukf::taken(filter.measurementUpdate(y));
+      const bool taken = mjukf::taken(filter.timeUpdate(t, plan.interval / plan.steps, plan.steps)) &&
+                         mjukf::taken(filter.measurementUpdate(y));
       EXPECT_TRUE(taken) << "seed " << seed << ", update " << k;
       if (!taken) return out;
     }
     const Eigen::Matrix<double, p, 1> error = filter.parameters() - truth;
     const Eigen::Matrix<double, p, p> covariance = filter.parameterCovariance();
     out.meanNees += error.dot(covariance.llt().solve(error)) / plan.runs;
-    for (int r = 0; r < p; ++r) out.covered(r) += (std::abs(error(r)) <= 1.96 * std::sqrt(covariance(r, r))) / double(plan.runs);
+    for (int r = 0; r < p; ++r)
+      out.covered(r) += (std::abs(error(r)) <= 1.96 * std::sqrt(covariance(r, r))) / double(plan.runs);
     out.alarms += filter.health() != Health::Ok;
     ++out.runs;
   }
@@ -249,7 +251,8 @@ TEST(ModifiedJointCovariance, PassesAndResetsKeepOrRestartIt) {
   filter.startPass(0.0, DriftingWalk::State(0.0), mjukf::ModifiedJointUkf<DriftingWalk>::StateMatrix::Identity());
   EXPECT_EQ(filter.parameterCovariance(), learnt);
   // A reset of the parameters starts again from the prior: (the larger of |θ̂₀| and (n + 1)|p_θ|)² = 0.25.
-  filter.reset(DriftingWalk::State(0.0), mjukf::ModifiedJointUkf<DriftingWalk>::StateMatrix::Identity(), DriftingWalk::Param(0.5));
+  filter.reset(DriftingWalk::State(0.0), mjukf::ModifiedJointUkf<DriftingWalk>::StateMatrix::Identity(),
+               DriftingWalk::Param(0.5));
   EXPECT_EQ(filter.parameterCovariance()(0, 0), 0.25);
 }
 

@@ -163,7 +163,8 @@ using Cases = ::testing::Types<
     Automatic<Case<mjukf::ModifiedJointUkf, Robot>>, Automatic<Case<mjukf::ModifiedJointUkf, Tank>>,
     Automatic<Case<mjukf::ModifiedJointUkf, RobotF>>, Automatic<DiscreteCase<mjukf::ModifiedJointUkf, double>>,
     Automatic<DiscreteCase<mjukf::ModifiedJointUkf, float>>, Automatic<Case2019<mjukf::ModifiedJointUkf, VanDerPol>>,
-    Automatic<Case2019<mjukf::ModifiedJointUkf, Lorenz>>, FollowingParameterCovariance<Case<mjukf::ModifiedJointUkf, Robot>>,
+    Automatic<Case2019<mjukf::ModifiedJointUkf, Lorenz>>,
+    FollowingParameterCovariance<Case<mjukf::ModifiedJointUkf, Robot>>,
     FollowingParameterCovariance<DiscreteCase<mjukf::ModifiedJointUkf, float>>,
     // The square-root form (covariance_form.hpp).
     Case<SquareRoot<mjukf::Ukf>::Filter, Robot>, Case<SquareRoot<mjukf::JointUkf>::Filter, Robot>,

@@ -77,13 +77,13 @@ TEST(Recovery, ASensorFaultTakesTheParametersBackToTheLastHealthyBlock) {
   EXPECT_EQ(record.alarmTime, 550.0);
   EXPECT_EQ(record.restoredTime, 500.0);
   const auto& f = recovering.filter();
-  EXPECT_EQ(f.time(), 550.0);              // the present time ...
-  EXPECT_EQ(f.state(), plain.state());     // ... and state,
+  EXPECT_EQ(f.time(), 550.0);                       // the present time ...
+  EXPECT_EQ(f.state(), plain.state());              // ... and state,
   EXPECT_EQ(f.parameters(), healthy.parameters());  // the healthy parameters and covariance,
   EXPECT_EQ(f.parameterCovariance(), healthy.parameterCovariance());
   EXPECT_EQ(f.covariance()(0, 0), 10 * healthy.covariance()(0, 0));  // the state's inflated,
-  EXPECT_EQ(f.covariance()(0, 1), 0.0);  // uncorrelated (a new pass)
-  EXPECT_EQ(f.health(), Health::Ok);      // and a fresh monitor
+  EXPECT_EQ(f.covariance()(0, 1), 0.0);                              // uncorrelated (a new pass)
+  EXPECT_EQ(f.health(), Health::Ok);                                 // and a fresh monitor
   EXPECT_EQ(f.healthStatistics().blocks, 0);
   // Clean data from here on: no further alarm, no further recovery.
   run(recovering, 400, 0, 0, 0, 5, 550, truth);

@@ -137,7 +137,8 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   using Sensitivity = ParameterSensitivity<Scalar, StateDim, MeasDim, ParamDim>;
 
   ModifiedJointParameters(const Settings& settings, const Param& initialParameters)
-      : followsSensitivities_(settings.automaticTransformation || settings.adaptiveScaling || settings.followParameterCovariance),
+      : followsSensitivities_(settings.automaticTransformation || settings.adaptiveScaling ||
+                              settings.followParameterCovariance),
         boundsActive_(settings.parameterBounds.active()) {
     spread(settings, initialParameters);
   }

@@ -36,8 +36,7 @@ template <class Scalar>
 SettingsError validateRecovery(const RecoverySettings<Scalar>& settings) {
   constexpr const char* owner = "mjukf::Recovering";
   if (SettingsError e = detail::requireFinite(owner, "covarianceInflation", settings.covarianceInflation)) return e;
-  if (!(settings.covarianceInflation > Scalar(1)))
-    return detail::invalid(owner, "covarianceInflation", "must be > 1");
+  if (!(settings.covarianceInflation > Scalar(1))) return detail::invalid(owner, "covarianceInflation", "must be > 1");
   if (settings.maxRecoveries < 1) return detail::invalid(owner, "maxRecoveries", "must be >= 1");
   return SettingsError();
 }

@@ -92,7 +92,7 @@ class ParameterErrorCovariance {
                const MeasMatrix& measurementNoise) {
     // The error's map Z = [[I − K H − W⁺ G H, −W⁺ G ψ], [G H, I + G ψ]] and its noise V = [K + W⁺ G; −G].
     const Eigen::Matrix<Scalar, P, N> parameterFromState = parameterGain * jacobian;  // G H
-    const ParamMatrix parameterFromParameter = parameterGain * sensitivity;          // G ψ
+    const ParamMatrix parameterFromParameter = parameterGain * sensitivity;           // G ψ
     transition_.setIdentity();
     transition_.template topLeftCorner<N, N>().noalias() -= gain * jacobian;
     transition_.template topLeftCorner<N, N>().noalias() -= correctedSensitivity * parameterFromState;
@@ -121,8 +121,8 @@ class ParameterErrorCovariance {
   const Joint& candidate() const { return candidate_; }
 
  private:
-  Joint joint_ = Joint::Zero();      // cov((η, e)) as committed
-  Joint candidate_ = Joint::Zero();  // after the step in progress
+  Joint joint_ = Joint::Zero();                 // cov((η, e)) as committed
+  Joint candidate_ = Joint::Zero();             // after the step in progress
   StateByParam effect_ = StateByParam::Zero();  // B = ∂Φ/∂θ from the last refresh of the sensitivities
   // Workspace.
   StateMatrix spread_ = StateMatrix::Zero(), change_ = StateMatrix::Zero(), jacobian_ = StateMatrix::Zero();
