@@ -224,7 +224,8 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
       sensitivity_.keepPrediction(step.interval());
     errorCovariance_.predict(priorPoints_, points, parameterPoints_, before,
                              refreshDue ? &sensitivity_.derivative() : nullptr,
-                             sensitivity_.candidateStateSensitivity(), step.settings.processNoise);
+                             sensitivity_.candidateStateSensitivity(), step.settings.processNoise,
+                             refreshDue ? sensitivity_.extrapolation() : Scalar(1));
   }
   template <class Step>
   Vector propagateMean(const Step& step, const Vector& mean) {
@@ -280,7 +281,7 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
     }
     candidateParameters_ = candidateParameterPoints_.rowwise().sum() / Scalar(Count);  // eq. 10
     if (!allFinite(candidateParameterPoints_) || !allFinite(candidateParameters_)) return Status::NonFiniteResult;
-    if (followsSensitivities_ && !correctErrorCovariance(c)) return Status::NonFiniteResult;
+    if (followsSensitivities_) correctErrorCovariance(c);  // never refuses: an unbounded P_θ is reported
     return Status::Ok;
   }
   void constrainMean(Vector&) {}
@@ -308,10 +309,10 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   // The covariance of θ̂ (detail/parameter_error_covariance.hpp) with this update's gains: K = U S⁻¹, G = diag(ξ) T,
   // and H = ∂g/∂x at (x̂⁻, θ̂) by forward differences, one measurement per state.
   template <class Correction>
-  bool correctErrorCovariance(const Correction& c) {
+  void correctErrorCovariance(const Correction& c) {
     const Scalar root = std::sqrt(std::numeric_limits<Scalar>::epsilon());
     const Meas nominal = measureModel(c.model, State(c.priorMean), c.input, parameters_);
-    const auto& prior = errorCovariance_.candidate();
+    const auto& prior = errorCovariance_.committed();  // the prediction, committed by the time update
     for (int i = 0; i < StateDim; ++i) {
       Scalar size = std::max(std::abs(c.priorMean(i)), std::sqrt(std::abs(prior(i, i))));
       if (!(size > Scalar(0)) || !std::isfinite(size)) size = Scalar(1);
@@ -324,9 +325,9 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
         if (!(*c.present)(j)) measurementJacobian_.row(j).setZero();
     stateGainTransposed_ = c.gainFactor.transpose();
     detail::solveUpperInPlace(c.innovationFactor, stateGainTransposed_);  // Kᵀ = S⁻ᵀ Uᵀ
-    return errorCovariance_.correct(measurementJacobian_, stateGainTransposed_.transpose(), gain_,
-                                    sensitivity_.candidateMeasurementSensitivity(),
-                                    sensitivity_.candidateStateSensitivity(), c.settings.measurementNoise);
+    errorCovariance_.correct(measurementJacobian_, stateGainTransposed_.transpose(), gain_,
+                             sensitivity_.candidateMeasurementSensitivity(), sensitivity_.candidateStateSensitivity(),
+                             c.settings.measurementNoise);
   }
 
   // T with the columns of missing components zeroed and each row rescaled to Σⱼ |tᵣⱼ| = 1 (eq. 14).

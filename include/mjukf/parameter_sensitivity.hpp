@@ -110,6 +110,7 @@ class ParameterSensitivity {
     }
     candidateInterval_ = interval;
     candidateStale_ = false;
+    extrapolation_ = extrapolation;
   }
   /// A time update without a refresh: W and ψ stay as they are (the next measurement update reuses ψ);
   /// the interval counts towards the next refresh's extrapolation.
@@ -258,6 +259,9 @@ class ParameterSensitivity {
   /// D = A W + B of the last `predict`, over its interval alone (a column whose difference was not
   /// finite: W's).
   const StateSensitivity& derivative() const { return derivative_; }
+  /// The factor of the last `predict`'s extrapolation, (open-loop time + interval) / interval: W⁻ =
+  /// W + factor · (D − W).
+  Scalar extrapolation() const { return extrapolation_; }
 
   /// W = ∂x̂/∂θ̂ of the last committed update.
   const StateSensitivity& stateSensitivity() const { return state_; }
@@ -279,6 +283,7 @@ class ParameterSensitivity {
   MeasSensitivity candidateMeasurement_ = MeasSensitivity::Zero();
   Information candidateInformation_ = Information::Identity();
   StateSensitivity derivative_ = StateSensitivity::Zero();  // D of the last predict
+  Scalar extrapolation_ = 1;                                // and its extrapolation factor
   Scalar candidateInterval_ = 0;
   bool stale_ = false;  // the last time update did not refresh W: reuse ψ
   bool candidateStale_ = false;

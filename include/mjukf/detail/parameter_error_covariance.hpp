@@ -50,10 +50,13 @@ class ParameterErrorCovariance {
   /// dynamics' Jacobian) follows from them once B = ∂Φ/∂θ is known. `derivative` is D = A W + B over this
   /// interval when the sensitivities were refreshed (then A (γL − W ϑ) = Δ − D ϑ), null otherwise (B as
   /// at the last refresh). `predictedSensitivity` is W⁻. Then η⁻ = A η + (A W + B − W⁻) e − w, e unchanged.
+  /// After open-loop propagations since the last time update, the sensitivities extrapolate W over them
+  /// from this interval's D by `extrapolation` = (open-loop time + interval) / interval; A and B are
+  /// extrapolated alike, I + x (A − I) and x B, so that W⁻ stays their image of W.
   /// Returns false when A is not finite (the points collapsed); then the prediction is η⁻ = η − w.
   bool predict(const Points& prior, const Points& propagated, const ParamPoints& parameterPoints,
                const StateByParam& sensitivity, const StateByParam* derivative,
-               const StateByParam& predictedSensitivity, const StateMatrix& processNoise) {
+               const StateByParam& predictedSensitivity, const StateMatrix& processNoise, Scalar extrapolation) {
     for (int j = 0; j < N; ++j) {
       spread_.col(j) = (prior.col(1 + j) - prior.col(1 + N + j)) * Scalar(0.5);
       change_.col(j) = (propagated.col(1 + j) - propagated.col(1 + N + j)) * Scalar(0.5);
@@ -70,9 +73,11 @@ class ParameterErrorCovariance {
     const bool found = allFinite(jacobian_);
     if (!found) jacobian_.setIdentity();
     if (derivative && found) effect_ = *derivative - jacobian_ * sensitivity;  // B
+    // Over the open-loop time too: A ← I + x (A − I), B ← x B.
+    jacobian_ = StateMatrix::Identity() + extrapolation * (jacobian_ - StateMatrix::Identity());
     transition_.setIdentity();
     transition_.template topLeftCorner<N, N>() = jacobian_;
-    StateByParam drift = effect_ - predictedSensitivity;
+    StateByParam drift = extrapolation * effect_ - predictedSensitivity;
     drift.noalias() += jacobian_ * sensitivity;
     transition_.template topRightCorner<N, P>() = drift;
     spreadJoint_.noalias() = transition_ * joint_;
@@ -117,8 +122,8 @@ class ParameterErrorCovariance {
 
   /// P_θ = cov(e), as committed.
   ParamMatrix parameterCovariance() const { return joint_.template bottomRightCorner<P, P>(); }
-  /// cov(η) and cov(η, e) of the prediction or correction in progress (its candidate).
-  const Joint& candidate() const { return candidate_; }
+  /// cov((η, e)) as committed.
+  const Joint& committed() const { return joint_; }
 
  private:
   Joint joint_ = Joint::Zero();                 // cov((η, e)) as committed
