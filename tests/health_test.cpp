@@ -77,6 +77,24 @@ TEST(HealthMonitor, AParameterMovingFarBeyondItsSigmaIsARunaway) {
   EXPECT_EQ(feed(1.0, 0.0, 500, 0.1).health(), Health::Ok);
 }
 
+TEST(HealthMonitor, AnUnboundedSigmaIsARunaway) {
+  // The MJUKF reports σ = +∞ once the error covariance it follows has overflowed.
+  mjukf::HealthSettings<double> settings;
+  Monitor monitor(settings);
+  const Eigen::Matrix2d covariance = Eigen::Matrix2d::Identity();
+  std::mt19937_64 rng(4);
+  std::normal_distribution<double> normal;
+  for (int k = 0; k < 100; ++k) {
+    const Eigen::Vector2d e(normal(rng), normal(rng));
+    const Param1 sigma(k < 60 ? 1.0 : kInf);
+    monitor.observeUpdate(e, covariance, e.squaredNorm(), nullptr, Param1(0), sigma, Param1(-kInf), Param1(kInf));
+    if (k == 49) {
+      EXPECT_EQ(monitor.health(), Health::Ok);
+    }
+  }
+  EXPECT_EQ(monitor.health(), Health::ParameterRunaway);
+}
+
 TEST(HealthMonitor, TheVerdictFollowsTheLastBlockAndTheFirstAlarmStays) {
   mjukf::HealthSettings<double> settings;
   Monitor monitor(settings);

@@ -235,7 +235,9 @@ TEST(ModifiedJointCovariance, AGainThatOvershootsMakesItGrow) {
     status = filter.timeUpdate(double(k), 1.0);
     if (mjukf::taken(status)) status = filter.measurementUpdate(DriftingWalk::Meas(x + 0.2 * normal(rng)));
     if (k == 0) first = filter.parameterCovariance()(0, 0);
-    if (k == 20) EXPECT_GT(filter.parameterCovariance()(0, 0), 25 * first);  // σ_θ five times its first
+    if (k == 20) {
+      EXPECT_GT(filter.parameterCovariance()(0, 0), 25 * first);  // σ_θ five times its first
+    }
   }
   EXPECT_FALSE(mjukf::taken(status)) << "the overshooting filter ran " << k << " updates without a refusal";
   EXPECT_GT(k, 20);
