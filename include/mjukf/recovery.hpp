@@ -46,8 +46,10 @@ template <class Scalar>
 struct RecoveryRecord {
   /// The alarm that triggered it (`Health::Ok` before the first recovery).
   Health alarm = Health::Ok;
-  /// The filter's time() when the alarm was raised, and the time of the estimate it went back to.
-  Scalar alarmTime = 0, restoredTime = 0;
+  /// The filter's time() when the alarm was raised.
+  Scalar alarmTime = 0;
+  /// The time of the healthy estimate whose parameters were taken back.
+  Scalar restoredTime = 0;
   /// Measurement updates (committed or not) passed to the wrapper before the alarm.
   long atUpdate = 0;
 };
@@ -68,7 +70,9 @@ struct RecoveryRecord {
 template <class Filter>
 class Recovering {
  public:
+  /// The filter's scalar type.
   using Scalar = typename Filter::Scalar;
+  /// The policy's settings.
   using Settings = RecoverySettings<Scalar>;
 
   /// Wraps `filter` with the default settings.

@@ -462,8 +462,8 @@ int studyCommand(const std::vector<std::string>& words) {
       for (std::size_t k = 0; k < seeds.size(); ++k) {
         const auto& result = results[s * seeds.size() + k][f];
         alarmed += result.health != Health::Ok;
-        unflagged += result.diverged && result.status == Status::Ok && result.health == Health::Ok &&
-                     !(result.nees <= covered);
+        unflagged +=
+            result.diverged && result.status == Status::Ok && result.health == Health::Ok && !(result.nees <= covered);
       }
       say(line +
           format(" %-8s %-8s %-10ld", format("%ld/%zu", diverged, seeds.size()).c_str(),
