@@ -117,8 +117,6 @@ class ParameterErrorCovariance {
   }
 
   void commit() { joint_ = candidate_; }
-  /// Drops a prediction or correction that was not committed.
-  void discard() { candidate_ = joint_; }
 
   /// P_θ = cov(e), as committed.
   ParamMatrix parameterCovariance() const { return joint_.template bottomRightCorner<P, P>(); }
