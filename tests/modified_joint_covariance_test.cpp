@@ -12,39 +12,14 @@
 #include <Eigen/Cholesky>
 #include <gtest/gtest.h>
 
+#include "drifting_walk.hpp"
 #include "mjukf/mjukf.hpp"
 
 namespace {
 
 using mjukf::Health;
-
-// A scalar random walk with a drift θ per step, measured with noise: x⁺ = x + θ + w, y = x + v.
-struct DriftingWalk {
-  using Scalar = double;
-  static constexpr int StateDim = 1, ParamDim = 1, MeasDim = 1, InputDim = 0;
-  using State = Eigen::Matrix<double, 1, 1>;
-  using Param = Eigen::Matrix<double, 1, 1>;
-  using Meas = Eigen::Matrix<double, 1, 1>;
-  using Input = Eigen::Matrix<double, 0, 1>;
-  State transition(double, double, const State& x, const Input&, const Param& theta) const {
-    return State(x(0) + theta(0));
-  }
-  Meas measurement(const State& x, const Param&) const { return Meas(x(0)); }
-};
-
-// The walk in float.
-struct FloatWalk {
-  using Scalar = float;
-  static constexpr int StateDim = 1, ParamDim = 1, MeasDim = 1, InputDim = 0;
-  using State = Eigen::Matrix<float, 1, 1>;
-  using Param = Eigen::Matrix<float, 1, 1>;
-  using Meas = Eigen::Matrix<float, 1, 1>;
-  using Input = Eigen::Matrix<float, 0, 1>;
-  State transition(float, float, const State& x, const Input&, const Param& theta) const {
-    return State(x(0) + theta(0));
-  }
-  Meas measurement(const State& x, const Param&) const { return Meas(x(0)); }
-};
+using DriftingWalk = mjukf::testing::DriftingWalk<double>;
+using FloatWalk = mjukf::testing::DriftingWalk<float>;
 
 // Two tanks in a line driven by a known input: x₁⁺ = 0.9 x₁ + θ₁ u, x₂⁺ = 0.8 x₂ + 0.1 x₁ − θ₂ u, both
 // measured, u(k) = sin(0.05 k) + 1. θ₂ lowers the second output: sensitivities of both signs.
