@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "drifting_walk.hpp"
 #include "mjukf/health.hpp"
 #include "mjukf/mjukf.hpp"
 
@@ -150,18 +151,7 @@ TEST(HealthMonitor, RefusedMeasurementsCountAcrossTakenTimeUpdates) {
 // ---------------------------------------------------------------------------------------------------
 // The filters: a scalar random walk with a drift θ per step, measured with noise: x⁺ = x + θ + w, y = x + v.
 
-struct RandomWalk {
-  using Scalar = double;
-  static constexpr int StateDim = 1, ParamDim = 1, MeasDim = 1, InputDim = 0;
-  using State = Eigen::Matrix<double, 1, 1>;
-  using Param = Eigen::Matrix<double, 1, 1>;
-  using Meas = Eigen::Matrix<double, 1, 1>;
-  using Input = Eigen::Matrix<double, 0, 1>;
-  State transition(double, double, const State& x, const Input&, const Param& theta) const {
-    return State(x(0) + theta(0));
-  }
-  Meas measurement(const State& x, const Param&) const { return Meas(x(0)); }
-};
+using RandomWalk = mjukf::testing::DriftingWalk<>;
 constexpr double kQ = 0.01, kR = 0.04;
 
 // The plant with drift `theta`, and a filter of type F whose settings `configure` sets; `rScale` is the
