@@ -69,7 +69,9 @@ class ParameterErrorCovariance {
       change_.noalias() -= effect_ * parameterSpread_;
     }
     // A = change · spread⁻¹, i.e. spreadᵀ Aᵀ = changeᵀ.
-    jacobian_ = spread_.transpose().partialPivLu().solve(change_.transpose()).transpose();
+    StateMatrix transposed = change_.transpose();
+    luSolveInPlace(spread_.transpose().partialPivLu(), transposed);
+    jacobian_ = transposed.transpose();
     const bool found = allFinite(jacobian_);
     if (!found) jacobian_.setIdentity();
     if (derivative && found) effect_ = *derivative - jacobian_ * sensitivity;  // B
