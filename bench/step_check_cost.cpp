@@ -1,6 +1,6 @@
 // mjukf_step_check_cost: what the step check (step_check.hpp) and the health monitor (health.hpp) cost a
-// measurement step. The step is that
-// of the step benchmarks (step_cases.hpp): the tank's UKF with the paper's settings, a time update over
+// measurement step. The step is that of the step benchmarks (step_cases.hpp): the tank's UKF with the
+// paper's settings, a time update over
 // one integrator step (h = 1 ms, I-TR-BDF2) followed by a measurement update, on simulated
 // measurements. Four copies of it differ only in `stepCheck` and `health`:
 //   default:     the library's defaults (Refuse, tolerance 0.5, a step unchanged is checked every 16

@@ -206,11 +206,11 @@ class ParameterSensitivity {
     const Scalar ratio = typicalInformation_ > Scalar(0) && Scalar(corrections_) > kSettling * memoryUpdates_
                              ? std::min(Scalar(1), arriving / typicalInformation_)
                              : Scalar(1);
-    const Scalar forgetting = ratio < Scalar(1) ? std::pow(forgetting_, ratio) : forgetting_;
+    const Scalar forgettingNow = ratio < Scalar(1) ? std::pow(forgetting_, ratio) : forgetting_;  // λʳ
     candidateTypicalInformation_ =
         typicalInformation_ + (Scalar(1) - forgetting_) * ratio * (arriving - typicalInformation_);
-    candidateInformation_ = forgetting * information_;
-    candidateInformation_.diagonal() += (Scalar(1) - forgetting) * priorInformation_;
+    candidateInformation_ = forgettingNow * information_;
+    candidateInformation_.diagonal() += (Scalar(1) - forgettingNow) * priorInformation_;
     candidateInformation_.noalias() += whitened_.transpose() * whitened_;
     return detail::allFinite(candidateMeasurement_) && detail::allFinite(candidateState_) &&
            detail::allFinite(candidateInformation_);

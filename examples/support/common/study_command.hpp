@@ -503,17 +503,14 @@ int studyCommand(const std::vector<std::string>& words) {
       // (its health), or by a covariance of θ̂ whose 99.9 % region holds the truth (it said it did not
       // know). Unflagged: confidently wrong while every step returned Ok.
       const double covered = detail::chiSquareQuantile(p, 3.090232);
+      // For a forced fault: updates from the fault to the first alarm over the diverged runs that raised one.
       long alarmed = 0, unflagged = 0;
+      std::vector<double> toAlarm;
       for (std::size_t k = 0; k < seeds.size(); ++k) {
         const auto& result = results[s * seeds.size() + k][f];
         alarmed += result.health != Health::Ok;
         unflagged +=
             result.diverged && result.status == Status::Ok && result.health == Health::Ok && !(result.nees <= covered);
-      }
-      // For a forced fault: updates from the fault to the first alarm over the diverged runs that raised one.
-      std::vector<double> toAlarm;
-      for (std::size_t k = 0; k < seeds.size(); ++k) {
-        const auto& result = results[s * seeds.size() + k][f];
         if (result.diverged && result.updatesToAlarm) toAlarm.push_back(double(*result.updatesToAlarm));
       }
       std::sort(toAlarm.begin(), toAlarm.end());
