@@ -176,6 +176,11 @@ void expectCompiledOutSettingsRefused() {
   expectRefused<typename Bare::ModifiedJointUkf>(R::initialParameters(), automaticT, "automaticTransformation",
                                                  noAutomatic);
   expectRefused<typename Bare::ModifiedJointUkf>(R::initialParameters(), adaptive, "adaptiveScaling", noAutomatic);
+  // The covariance of θ̂ follows the automatic modes' sensitivities: it goes with them.
+  auto followed = unmonitored(R::modifiedJointUkf());
+  followed.followParameterCovariance = true;
+  expectRefused<typename Bare::ModifiedJointUkf>(R::initialParameters(), followed, "followParameterCovariance",
+                                                 noAutomatic);
   // Without the automatic modes alone, the monitor may stay on.
   auto monitoredAdaptive = R::modifiedJointUkf();
   monitoredAdaptive.adaptiveScaling = true;

@@ -27,9 +27,10 @@ namespace feature {
 /// setting `health`. Every filter has it. Compiled out, `health.enabled` must be false.
 struct HealthMonitor {};
 /// The MJUKF's automatic modes (parameter_sensitivity.hpp, docs/tuning-mjukf.md): the settings
-/// `automaticTransformation` and `adaptiveScaling`, the sensitivities they follow and `sensitivity()`.
-/// Only `ModifiedJointUkf` has them; the other filters accept the tag and are unchanged by it.
-/// Compiled out, both settings must be false.
+/// `automaticTransformation` and `adaptiveScaling`, the sensitivities they follow and `sensitivity()`,
+/// and the covariance of θ̂ that follows the same sensitivities (`followParameterCovariance`;
+/// `parameterCovariance()` is then NaN, unknown). Only `ModifiedJointUkf` has them; the other filters
+/// accept the tag and are unchanged by it. Compiled out, the three settings must be false.
 struct AutomaticModes {};
 }  // namespace feature
 

@@ -9,6 +9,7 @@
 
 #include <Eigen/Core>
 
+#include "mjukf/detail/parameter_error_covariance.hpp"
 #include "mjukf/detail/unscented_engine.hpp"
 #include "mjukf/detail/validation.hpp"
 #include "mjukf/features.hpp"
@@ -103,6 +104,13 @@ struct ModifiedJointUkfSettings : ParameterEstimationSettings<Scalar_, StateDim,
   /// time update (p extra propagations each) and kept in between; 0: once, at the first time update.
   /// Must be ≥ 0, checked even with both modes off.
   int sensitivityInterval = 1;
+  /// true (the default): the filter follows the covariance of θ̂, `parameterCovariance()`
+  /// (docs/algorithms.md §5.1), from which the health monitor judges the parameters' motion. It needs
+  /// the sensitivities W and ψ that the automatic modes follow anyway; with both modes off it costs p
+  /// extra propagations at every `sensitivityInterval`-th time update, and every measurement update n
+  /// evaluations of g. false: the paper's MJUKF and its cost (the paper presets), and
+  /// `parameterCovariance()` is NaN, unknown.
+  bool followParameterCovariance = true;
 };
 
 /// \cond INTERNAL
@@ -111,9 +119,9 @@ namespace detail {
 /// The parameter policy of `ModifiedJointUkf` (docs/algorithms.md §5): every sigma point χᵢ carries its
 /// own θᵢ (eq. 8), is propagated and measured with it, and the θᵢ move against their point's
 /// measurement error (eq. 9); θ̂ is their mean (eq. 10). With the automatic modes, T and a ξ per
-/// parameter come from the sensitivities (parameter_sensitivity.hpp); compiled out (`Features`,
-/// features.hpp), their state and code are absent. detail/unscented_engine.hpp §3 lists what a policy
-/// supplies.
+/// parameter come from the sensitivities (parameter_sensitivity.hpp), which P_θ follows too; compiled
+/// out (`Features`, features.hpp), their state and code are absent and P_θ is unknown.
+/// detail/unscented_engine.hpp §3 lists what a policy supplies.
 template <class Model, class Integrator, class Settings, class Est, class Features = AllFeatures>
 class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settings, Est> {
   using Base = ParameterPolicy<Model, Integrator, Settings, Est>;
@@ -131,10 +139,12 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
                 "theta_i (the cubature set has 2n)");
   using Transformation = Eigen::Matrix<Scalar, ParamDim, MeasDim>;
   using ParamPoints = Eigen::Matrix<Scalar, ParamDim, Count>;
+  using ParamMatrix = Eigen::Matrix<Scalar, ParamDim, ParamDim>;
   using Sensitivity = ParameterSensitivity<Scalar, StateDim, MeasDim, ParamDim>;
 
   ModifiedJointParameters(const Settings& settings, const Param& initialParameters)
-      : automatic_(settings.automaticTransformation || settings.adaptiveScaling),
+      : followsSensitivities_(settings.automaticTransformation || settings.adaptiveScaling ||
+                              settings.followParameterCovariance),
         boundsActive_(settings.parameterBounds.active()) {
     spread(settings, initialParameters);
   }
@@ -144,15 +154,21 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   const Transformation& lastTransformation() const { return transformation_; }
   const Param& lastScalings() const { return scalings_; }
   const Sensitivity& sensitivity() const { return sensitivity_; }
+  ParamMatrix covariance() const {
+    if constexpr (Automatic)
+      if (followsSensitivities_) return errorCovariance_.parameterCovariance();
+    return ParamMatrix::Constant(std::numeric_limits<Scalar>::quiet_NaN());
+  }
 
   // Eq. 8: θᵢ = θ̂₀ − p_θ (n + 1) + p_θ (i + 1), i = 0 … 2n; their mean is θ̂₀. The automatic modes
-  // start knowing each parameter to about the larger of its size and the half-width of the θᵢ.
+  // and P_θ start knowing each parameter to about the larger of its size and the half-width of the θᵢ.
   void spread(const Settings& s, const Param& center) {
     if constexpr (Automatic) {
       Param scale = center.cwiseAbs().cwiseMax(s.parameterSpread.cwiseAbs() * Scalar(StateDim + 1));
       for (int r = 0; r < ParamDim; ++r)
         if (!(scale(r) > Scalar(0))) scale(r) = Scalar(1);
       sensitivity_.start(scale, s.measurementNoise);
+      errorCovariance_.start(s.initialCovariance, scale.array().square().matrix().asDiagonal());
       timeUpdates_ = 0;
       transformation_.setZero();
       scalings_.setZero();
@@ -163,9 +179,12 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
     if (boundsActive_)
       for (int i = 0; i < Count; ++i) s.parameterBounds.clamp(parameterPoints_.col(i));
   }
-  // A new state estimate that does not depend on θ̂ (reset of the state alone): W = 0.
-  void restartState() {
-    if constexpr (Automatic) sensitivity_.restartState();
+  // A new state estimate of covariance P that does not depend on θ̂ (reset of the state alone): W = 0.
+  void restartState([[maybe_unused]] const typename Settings::StateMatrix& covariance) {
+    if constexpr (Automatic) {
+      sensitivity_.restartState();
+      errorCovariance_.restartState(covariance);
+    }
   }
 
   // What the parameter part has learnt (the filter's ParameterKnowledge), and a new pass from it: the
@@ -176,14 +195,15 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
     MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<Sensitivity, 1> sensitivity;
     MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<Transformation, 2> transformation;
     MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<Param, 3> scalings;
+    MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<ParamMatrix, 4> covariance;
   };
   Knowledge knowledge() const {
     if constexpr (Automatic)
-      return Knowledge{parameters_, parameterPoints_, sensitivity_, transformation_, scalings_};
+      return Knowledge{parameters_, parameterPoints_, sensitivity_, transformation_, scalings_, covariance()};
     else
-      return Knowledge{parameters_, parameterPoints_, {}, {}, {}};
+      return Knowledge{parameters_, parameterPoints_, {}, {}, {}, {}};
   }
-  void startPass(const Knowledge& k) {
+  void startPass(const Knowledge& k, [[maybe_unused]] const typename Settings::StateMatrix& stateCovariance) {
     parameters_ = k.parameters;
     parameterPoints_ = k.parameterPoints;
     if constexpr (Automatic) {
@@ -191,6 +211,7 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
       sensitivity_.restartPass();
       transformation_ = k.transformation;
       scalings_ = k.scalings;
+      errorCovariance_.start(stateCovariance, k.covariance);
       timeUpdates_ = 0;
     }
   }
@@ -203,19 +224,30 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   // about point 0 (χ₀ = x̂ with θ₀), whose propagation is the nominal of the forward differences.
   template <class Step>
   void propagatePoints(const Step& step, Points& points) {
-    [[maybe_unused]] const State x0 = points.col(0);
+    if constexpr (Automatic)
+      if (followsSensitivities_) priorPoints_ = points;
     for (int i = 0; i < Count; ++i) {
       const Param theta = parameterPoints_.col(i);
       points.col(i) = step.propagate(theta, points.col(i));
     }
-    if constexpr (Automatic) {
-      if (!automatic_) return;
-      const int every = step.settings.sensitivityInterval;
-      const bool refreshDue = every == 0 ? timeUpdates_ == 0 : timeUpdates_ % every == 0;
-      if (!refreshDue) return sensitivity_.keepPrediction(step.interval());
-      sensitivity_.predict(x0, parameterPoints_.col(0), points.col(0), step.interval(),
+    if constexpr (Automatic) followSensitivities(step, points);
+  }
+  // W, and P_θ's prediction, over the time update that took priorPoints_ to points.
+  template <class Step>
+  void followSensitivities(const Step& step, const Points& points) {
+    if (!followsSensitivities_) return;
+    const int every = step.settings.sensitivityInterval;
+    const bool refreshDue = every == 0 ? timeUpdates_ == 0 : timeUpdates_ % every == 0;
+    const typename Sensitivity::StateSensitivity before = sensitivity_.stateSensitivity();
+    if (refreshDue)
+      sensitivity_.predict(priorPoints_.col(0), parameterPoints_.col(0), points.col(0), step.interval(),
                            [&](const State& x, const Param& theta) { return step.propagate(theta, x); });
-    }
+    else
+      sensitivity_.keepPrediction(step.interval());
+    errorCovariance_.predict(priorPoints_, points, parameterPoints_, before,
+                             refreshDue ? &sensitivity_.derivative() : nullptr,
+                             sensitivity_.candidateStateSensitivity(), step.settings.processNoise,
+                             refreshDue ? sensitivity_.extrapolation() : Scalar(1));
   }
   template <class Step>
   Vector propagateMean(const Step& step, const Vector& mean) {
@@ -236,9 +268,10 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   Status correctParameters(const typename Base::CorrectionOf& c) {
     const Settings& s = c.settings;
     if constexpr (Automatic) {
-      if (automatic_) {
+      if (followsSensitivities_) {
         const Scalar memory = s.adaptiveScaling ? s.convergenceTime : std::numeric_limits<Scalar>::infinity();
-        const Scalar updates = s.adaptiveScaling ? s.minimumMemoryUpdates : std::numeric_limits<Scalar>::infinity();
+        const Scalar updates =
+            s.adaptiveScaling ? s.minimumMemoryUpdates : std::numeric_limits<Scalar>::infinity();
         const auto measure = [&c](const State& x, const Param& theta) {
           return measureModel(c.model, x, c.input, theta);
         };
@@ -262,21 +295,26 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
         for (int j = 0; j < MeasDim; ++j)
           if (!(*c.present)(j)) errors_(j, i) = Scalar(0);
     }
-    // Eq. 9 for every point at once, diag(ξ) T (y − Yᵢ): each parameter's ξ scales its row of T.
-    steps_.noalias() = (candidateScalings_.asDiagonal() * candidateTransformation_).lazyProduct(errors_);
+    // Eq. 9 for every point at once, G (y − Yᵢ) with the gain G = diag(ξ) T: each parameter's ξ scales
+    // its row of T.
+    gain_.noalias() = candidateScalings_.asDiagonal() * candidateTransformation_;
+    steps_.noalias() = gain_.lazyProduct(errors_);
     for (int i = 0; i < Count; ++i) {
       candidateParameterPoints_.col(i) = parameters_ - steps_.col(i);
       if (boundsActive_) s.parameterBounds.clamp(candidateParameterPoints_.col(i));
     }
     candidateParameters_ = candidateParameterPoints_.rowwise().sum() / Scalar(Count);  // eq. 10
     if (!allFinite(candidateParameterPoints_) || !allFinite(candidateParameters_)) return Status::NonFiniteResult;
+    if constexpr (Automatic)
+      if (followsSensitivities_) correctErrorCovariance(c);  // never refuses: an unbounded P_θ is reported
     return Status::Ok;
   }
   void constrainMean(Vector&) {}
 
   void commitPrediction() {
     if constexpr (Automatic) {
-      if (!automatic_) return;
+      if (!followsSensitivities_) return;
+      errorCovariance_.commit();
       sensitivity_.commitPrediction();
       ++timeUpdates_;
     }
@@ -285,7 +323,8 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
     parameters_ = candidateParameters_;
     parameterPoints_ = candidateParameterPoints_;
     if constexpr (Automatic) {
-      if (!automatic_) return;
+      if (!followsSensitivities_) return;
+      errorCovariance_.commit();
       sensitivity_.commitCorrection();
       transformation_ = candidateTransformation_;
       scalings_ = candidateScalings_;
@@ -293,10 +332,34 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   }
   void commitOpenLoop([[maybe_unused]] Scalar interval) {
     if constexpr (Automatic)
-      if (automatic_) sensitivity_.commitOpenLoop(interval);
+      if (followsSensitivities_) sensitivity_.commitOpenLoop(interval);
   }
 
  private:
+  // The covariance of θ̂ (detail/parameter_error_covariance.hpp) with this update's gains: K = U S⁻¹, G = diag(ξ) T,
+  // and H = ∂g/∂x at (x̂⁻, θ̂) by forward differences, one measurement per state.
+  template <class Correction>
+  void correctErrorCovariance(const Correction& c) {
+    const Scalar root = std::sqrt(std::numeric_limits<Scalar>::epsilon());
+    const Meas nominal = measureModel(c.model, State(c.priorMean), c.input, parameters_);
+    const auto& prior = errorCovariance_.committed();  // the prediction, committed by the time update
+    for (int i = 0; i < StateDim; ++i) {
+      Scalar size = std::max(std::abs(c.priorMean(i)), std::sqrt(std::abs(prior(i, i))));
+      if (!(size > Scalar(0)) || !std::isfinite(size)) size = Scalar(1);
+      State moved = c.priorMean;
+      moved(i) += root * size;
+      measurementJacobian_.col(i) = (measureModel(c.model, moved, c.input, parameters_) - nominal) / (root * size);
+    }
+    if (c.present)
+      for (int j = 0; j < MeasDim; ++j)
+        if (!(*c.present)(j)) measurementJacobian_.row(j).setZero();
+    stateGainTransposed_ = c.gainFactor.transpose();
+    detail::solveUpperInPlace(c.innovationFactor, stateGainTransposed_);  // Kᵀ = S⁻ᵀ Uᵀ
+    errorCovariance_.correct(measurementJacobian_, stateGainTransposed_.transpose(), gain_,
+                             sensitivity_.candidateMeasurementSensitivity(), sensitivity_.candidateStateSensitivity(),
+                             c.settings.measurementNoise);
+  }
+
   // T with the columns of missing components zeroed and each row rescaled to Σⱼ |tᵣⱼ| = 1 (eq. 14).
   void reduceToPresent(const MeasurementMask<MeasDim>& present) {
     const Transformation t = candidateTransformation_;
@@ -309,7 +372,8 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
     }
   }
 
-  bool automatic_;
+  // An automatic mode or followParameterCovariance: W, ψ and P_θ followed (never, compiled out).
+  MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<bool, 0> followsSensitivities_;
   bool boundsActive_;
   Param parameters_ = Param::Zero();                   // θ̂
   ParamPoints parameterPoints_ = ParamPoints::Zero();  // θᵢ
@@ -318,7 +382,16 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   ParamPoints candidateParameterPoints_ = ParamPoints::Zero();
   Eigen::Matrix<Scalar, MeasDim, Count> errors_ = Eigen::Matrix<Scalar, MeasDim, Count>::Zero();  // y − Yᵢ
   ParamPoints steps_ = ParamPoints::Zero();                                                       // ξ T (y − Yᵢ)
-  // The automatic modes (committed with the parameters); absent when they are compiled out.
+  Transformation gain_ = Transformation::Zero();                                                  // G = diag(ξ) T
+  // What the automatic modes and P_θ follow; absent when the automatic modes are compiled out.
+  // cov((η, θ̂ − θ)) (detail/parameter_error_covariance.hpp), and the workspace of its update.
+  using ErrorCovariance = detail::ParameterErrorCovariance<Scalar, StateDim, MeasDim, ParamDim>;
+  using MeasurementByState = Eigen::Matrix<Scalar, MeasDim, StateDim>;
+  MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<ErrorCovariance, 5> errorCovariance_;
+  MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<Points, 6> priorPoints_{Points::Zero()};
+  MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<MeasurementByState, 7> measurementJacobian_{MeasurementByState::Zero()};
+  MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<MeasurementByState, 8> stateGainTransposed_{MeasurementByState::Zero()};
+  // The automatic modes' state (committed with the parameters).
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<Sensitivity, 1> sensitivity_;
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<long, 2> timeUpdates_{0};
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<Transformation, 3> transformation_{Transformation::Zero()};
@@ -358,7 +431,7 @@ struct ModifiedJointParametersWith {
 ///
 /// Template arguments: docs/design.md, "Template arguments of every filter"; the sigma-point set must
 /// have 2n + 1 points. Eqs. 9–10 touch no covariance, so they are the same in both covariance forms.
-/// `Without<feature::AutomaticModes>` (features.hpp) compiles the automatic modes out.
+/// `Without<feature::AutomaticModes>` (features.hpp) compiles the automatic modes, and P_θ with them, out.
 template <class Model_, class Integrator_ = DefaultIntegrator<Model_>, class PointSet = MerweScaled,
           class Form = FullCovariance, class Features = AllFeatures>
 class ModifiedJointUkf
@@ -403,6 +476,7 @@ class ModifiedJointUkf
           "(mjukf::Without<mjukf::feature::AutomaticModes>)";
       if (settings.automaticTransformation) return detail::invalid(kOwner, "automaticTransformation", compiledOut);
       if (settings.adaptiveScaling) return detail::invalid(kOwner, "adaptiveScaling", compiledOut);
+      if (settings.followParameterCovariance) return detail::invalid(kOwner, "followParameterCovariance", compiledOut);
     }
     if (SettingsError e = detail::requireFinite(kOwner, "scaling (xi)", settings.scaling)) return e;
     if (SettingsError e = detail::requireFinite(kOwner, "transformation (T)", settings.transformation)) return e;
@@ -447,8 +521,8 @@ class ModifiedJointUkf
     return Param(this->settings_.scaling);
   }
   /// What the automatic modes know (W = ∂x̂/∂θ̂, ψ = ∂ŷ/∂θ̂ of the last update, the information about
-  /// θ); not followed, and zero, when neither mode is on. Not available in a filter compiled
-  /// `Without<feature::AutomaticModes>`.
+  /// θ); not followed, and zero, when neither mode is on and `followParameterCovariance` is false. Not
+  /// available in a filter compiled `Without<feature::AutomaticModes>`.
   template <class F = Features>
   const Sensitivity& sensitivity() const {
     static_assert(F::automaticModes,
@@ -456,6 +530,12 @@ class ModifiedJointUkf
                   "(mjukf::Without<mjukf::feature::AutomaticModes>): sensitivity() is not available");
     return this->policy_.sensitivity();
   }
+  /// P_θ, the covariance of θ̂ (p × p; docs/algorithms.md §5.1): the first-order covariance of θ̂'s
+  /// error through the gains this filter used, from the prior diag(sᵣ²), sᵣ the larger of |θ̂₀ᵣ| and
+  /// (n + 1)|p_θᵣ|. It takes θ as constant and the model as right; NaN (unknown) when
+  /// `followParameterCovariance` and both automatic modes are off, and in a filter compiled
+  /// `Without<feature::AutomaticModes>`.
+  Eigen::Matrix<Scalar, ParamDim, ParamDim> parameterCovariance() const { return this->policy_.covariance(); }
 
   /// Starts again from (state, covariance), keeping θ̂ and the θᵢ (and, in the automatic modes, the
   /// information about θ; the new state does not depend on θ̂, W = 0). When one is not finite or the
@@ -466,7 +546,7 @@ class ModifiedJointUkf
     if (SettingsError e = detail::requireFinite(kOwner, "state", state)) return detail::report(e);
     if (SettingsError e = Engine::checkResetCovariance(kOwner, covariance)) return detail::report(e);
     this->resetEstimate(state, covariance);
-    this->policy_.restartState();
+    this->policy_.restartState(covariance);
     return ResetResult();
   }
   /// Everything the filter has learnt about θ, carried from one pass over a record to the next
@@ -499,7 +579,7 @@ class ModifiedJointUkf
       return detail::report(e);
     if (SettingsError e = Engine::checkResetCovariance(kOwner, covariance)) return detail::report(e);
     this->resetEstimate(state, covariance);
-    this->policy_.startPass(knowledge);
+    this->policy_.startPass(knowledge, covariance);
     this->restartTime(startTime);
     return ResetResult();
   }
@@ -513,6 +593,7 @@ class ModifiedJointUkf
     if (SettingsError e = Engine::checkResetCovariance(kOwner, covariance)) return detail::report(e);
     this->resetEstimate(state, covariance);
     this->policy_.spread(this->settings_, parameters);
+    this->policy_.restartState(covariance);
     return ResetResult();
   }
 
