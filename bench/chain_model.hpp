@@ -40,12 +40,16 @@ struct Chain {
 
   State derivative(Scalar, const State& x, const Input& u, const Param& theta) const {
     const Scalar k = theta(0);
-    const Scalar k3 = P == 4 ? theta(1 % P) : Scalar(1);
-    const Scalar b = P == 4 ? theta(2 % P) : Scalar(0.5);
-    const Scalar g = P == 4 ? theta(3 % P) : Scalar(1);
+    Scalar k3 = Scalar(1), b = Scalar(0.5), g = Scalar(1);
+    if constexpr (P == 4) {
+      k3 = theta(1);
+      b = theta(2);
+      g = theta(3);
+    }
     State dx;
     dx.template head<Masses>() = x.template tail<Masses>();
-    // force[i]: the tension of the link into mass i (from the wall for i = 0).
+    // `force`: the pull of the link into mass i (from the wall for i = 0) against its motion; `next`: that
+    // of the link out of it, which pulls it the other way.
     Scalar next = Scalar(0);
     for (int i = Masses - 1; i >= 0; --i) {
       const Scalar stretch = x(i) - (i > 0 ? x(i - 1) : Scalar(0));

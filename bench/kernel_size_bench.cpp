@@ -116,8 +116,8 @@ void cholesky(benchmark::State& state) {
 
 template <class Scalar, int L>
 void registerSize() {
-  const std::string suffix = std::string("/") + (std::is_same_v<Scalar, float> ? "float" : "double") + "/" +
-                             std::to_string(L);
+  const std::string suffix =
+      std::string("/") + (std::is_same_v<Scalar, float> ? "float" : "double") + "/" + std::to_string(L);
   benchmark::RegisterBenchmark(("kernel/covariance/coefficientwise" + suffix).c_str(), covariance<Scalar, L, 0>);
   benchmark::RegisterBenchmark(("kernel/covariance/triangle" + suffix).c_str(), covariance<Scalar, L, 1>);
   benchmark::RegisterBenchmark(("kernel/covariance/gemm" + suffix).c_str(), covariance<Scalar, L, 2>);

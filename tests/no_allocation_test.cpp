@@ -330,8 +330,7 @@ TEST(NoAllocation, GeneralKernelsAtLargeSize) {
   using ChainF = mjukf::bench::Chain<float, 32, 4>;
   using JointD = mjukf::JointUkf<ChainD, mjukf::Rk4<double>>;
   using UkfF = mjukf::Ukf<ChainF, mjukf::Rk4<float>>;
-  expectNoAllocationAtLargeSize<JointD>(ChainD::trueParameters(),
-                                        mjukf::bench::ChainExperiment<ChainD>::jointUkf());
+  expectNoAllocationAtLargeSize<JointD>(ChainD::trueParameters(), mjukf::bench::ChainExperiment<ChainD>::jointUkf());
   expectNoAllocationAtLargeSize<UkfF>(ChainF::trueParameters(), mjukf::bench::ChainExperiment<ChainF>::ukf());
 }
 

@@ -73,9 +73,9 @@ void expectOuterSumsAgree(std::mt19937_64& rng) {
   la::weightedOuterSumProduct(d, d, w, gemm);
   la::weightedCovarianceTriangle(d, w, triangle);
   la::weightedCovariance(d, w, chosen);
-  const Eigen::Matrix<double, L, L> bound = 2 * 2 * gamma<Scalar>(Count + 2) *
-                                            (d.cwiseAbs() * w.cwiseAbs().asDiagonal() * d.cwiseAbs().transpose())
-                                                .template cast<double>();
+  const Eigen::Matrix<double, L, L> bound =
+      2 * 2 * gamma<Scalar>(Count + 2) *
+      (d.cwiseAbs() * w.cwiseAbs().asDiagonal() * d.cwiseAbs().transpose()).template cast<double>();
   EXPECT_TRUE(((gemm - old).template cast<double>().cwiseAbs().array() <= bound.array()).all()) << "L = " << L;
   EXPECT_TRUE(((triangle - old).template cast<double>().cwiseAbs().array() <= bound.array()).all()) << "L = " << L;
   EXPECT_EQ(triangle, triangle.transpose());  // mirrored: exactly symmetric
@@ -104,8 +104,7 @@ void expectSubtractionsAgree(std::mt19937_64& rng) {
   la::subtractOuterRankUpdate(rank, u);
   la::subtractOuter(chosen, u);
   const Eigen::Matrix<double, L, L> bound =
-      2 * 2 * gamma<Scalar>(M + 1) *
-      (p.cwiseAbs() + u.cwiseAbs() * u.cwiseAbs().transpose()).template cast<double>();
+      2 * 2 * gamma<Scalar>(M + 1) * (p.cwiseAbs() + u.cwiseAbs() * u.cwiseAbs().transpose()).template cast<double>();
   EXPECT_TRUE(((rank - old).template cast<double>().cwiseAbs().array() <= bound.array()).all()) << "L = " << L;
   EXPECT_EQ(rank, rank.transpose());
   EXPECT_EQ(chosen, L >= la::generalKernelsFrom<Scalar>.subtractRankUpdate ? rank : old) << "L = " << L;
@@ -117,10 +116,11 @@ void expectFactorsAgree(std::mt19937_64& rng) {
   Eigen::Matrix<Scalar, N, N> unrolled, blocked, chosen;
   // The unrolled factor's code and compile time grow as N³: above the threshold, where the library no
   // longer instantiates it, the reference is Eigen's LLT (backward stable as well: the same bound).
-  if constexpr (N <= la::generalKernelsFrom<Scalar>.cholesky)
+  if constexpr (N <= la::generalKernelsFrom<Scalar>.cholesky) {
     ASSERT_TRUE(la::choleskyLowerUnrolled(a, unrolled));
-  else
+  } else {
     unrolled = a.llt().matrixL();
+  }
   ASSERT_TRUE(la::choleskyLowerBlocked(a, blocked));
   ASSERT_TRUE(la::choleskyLower(a, chosen));
   const Eigen::Matrix<double, N, N> ad = a.template cast<double>();
@@ -145,8 +145,11 @@ void expectSameRefusals() {
   Matrix nan = Matrix::Identity();
   nan(N - 1, N - 2) = std::numeric_limits<Scalar>::quiet_NaN();
   const Matrix inf = Matrix::Identity() * std::numeric_limits<Scalar>::infinity();
-  for (const Matrix* m : {&rankOne, &indefinite, &nan, &inf}) {
-    if constexpr (N <= la::generalKernelsFrom<Scalar>.cholesky) EXPECT_FALSE(la::choleskyLowerUnrolled(*m, s));
+  const Matrix* refused[] = {&rankOne, &indefinite, &nan, &inf};
+  for (const Matrix* m : refused) {
+    if constexpr (N <= la::generalKernelsFrom<Scalar>.cholesky) {
+      EXPECT_FALSE(la::choleskyLowerUnrolled(*m, s));
+    }
     EXPECT_FALSE(la::choleskyLowerBlocked(*m, s));
   }
   // Just above and below the margin N ε a_jj on the last pivot: the same verdict from both.
@@ -155,7 +158,9 @@ void expectSameRefusals() {
     nearSingular(N - 1, N - 1) = Scalar(1 + factor * N * std::numeric_limits<Scalar>::epsilon());
     nearSingular(N - 1, 0) = nearSingular(0, N - 1) = Scalar(1);
     EXPECT_EQ(la::choleskyLowerBlocked(nearSingular, s), factor > 1) << factor;
-    if constexpr (N <= la::generalKernelsFrom<Scalar>.cholesky) EXPECT_EQ(la::choleskyLowerUnrolled(nearSingular, s), factor > 1) << factor;
+    if constexpr (N <= la::generalKernelsFrom<Scalar>.cholesky) {
+      EXPECT_EQ(la::choleskyLowerUnrolled(nearSingular, s), factor > 1) << factor;
+    }
   }
 }
 

@@ -42,8 +42,8 @@ struct GeneralKernelSizes {
 #ifdef MJUKF_GENERAL_KERNELS_FROM
 template <class Scalar>
 inline constexpr GeneralKernelSizes generalKernelsFrom{MJUKF_GENERAL_KERNELS_FROM, MJUKF_GENERAL_KERNELS_FROM,
-                                                        MJUKF_GENERAL_KERNELS_FROM, MJUKF_GENERAL_KERNELS_FROM,
-                                                        MJUKF_GENERAL_KERNELS_FROM};
+                                                       MJUKF_GENERAL_KERNELS_FROM, MJUKF_GENERAL_KERNELS_FROM,
+                                                       MJUKF_GENERAL_KERNELS_FROM};
 #else
 template <class Scalar>
 inline constexpr GeneralKernelSizes generalKernelsFrom =
@@ -248,7 +248,7 @@ void mirrorLowerTriangle(Eigen::MatrixBase<Matrix>& m) {
 // the lower triangle only, mirrored: half the arithmetic, and exactly symmetric.
 template <class Dev, class Weights, class Out>
 void weightedCovarianceTriangle(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase<Weights>& weights,
-                               Eigen::MatrixBase<Out>& out) {
+                                Eigen::MatrixBase<Out>& out) {
   out.template triangularView<Eigen::Lower>() = (d * weights.asDiagonal()) * d.transpose();
   mirrorLowerTriangle(out);
 }
