@@ -8,6 +8,8 @@
 #   bash scripts/scaling.sh [build-dir]               # default build-bench; about 10 minutes of builds
 #   MJUKF_SCALING_KERNELS=1 bash scripts/scaling.sh   # also mjukf_kernel_bench (about 20 minutes to build)
 #   MJUKF_SCALING_COMPILE=1 bash scripts/scaling.sh   # also scripts/compile_cost.sh (about 3 minutes)
+#   MJUKF_SCALING_SKIP_BUILD=1 …                     # run what <build-dir> holds, as built
+#   MJUKF_SCALING_MIN_TIME=0.2 bash scripts/scaling.sh # Google Benchmark's time per repetition (default 0.5 s)
 #
 # JSON goes to <build-dir>/results/. Results already there from an earlier run (kernels.json,
 # compile_cost.txt) are reported again when not re-measured.
@@ -19,20 +21,23 @@ mkdir -p "$results"
 git rev-parse --short HEAD > "$results/commit" 2>/dev/null || echo "?" > "$results/commit"
 jobs=$(nproc)
 
-cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release -DMJUKF_WITH_SUNDIALS=OFF -DMJUKF_BUILD_BENCHMARKS=ON >/dev/null
-targets=(mjukf_scaling_bench mjukf_scaling_bench_coefficientwise)
-[[ ${MJUKF_SCALING_KERNELS:-0} == 1 ]] && targets+=(mjukf_kernel_bench)
-cmake --build "$build" -j "$jobs" --target "${targets[@]}"
+if [[ ${MJUKF_SCALING_SKIP_BUILD:-0} != 1 ]]; then
+  cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release -DMJUKF_WITH_SUNDIALS=OFF -DMJUKF_BUILD_BENCHMARKS=ON >/dev/null
+  targets=(mjukf_scaling_bench mjukf_scaling_bench_coefficientwise)
+  [[ ${MJUKF_SCALING_KERNELS:-0} == 1 ]] && targets+=(mjukf_kernel_bench)
+  cmake --build "$build" -j "$jobs" --target "${targets[@]}"
+fi
 
 run() {  # run <program> <name>
   uptime | sed 's/.*load average: //' > "$results/$2.load"
   "$build/bench/$1" --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
+    --benchmark_min_time="${MJUKF_SCALING_MIN_TIME:-0.5}" \
     --benchmark_out="$results/$2.json" --benchmark_out_format=json
 }
 run mjukf_scaling_bench scaling
 run mjukf_scaling_bench_coefficientwise scaling_coefficientwise
-[[ ${MJUKF_SCALING_KERNELS:-0} == 1 ]] && run mjukf_kernel_bench kernels
-[[ ${MJUKF_SCALING_COMPILE:-0} == 1 ]] && bash scripts/compile_cost.sh "$results/compile_cost.txt"
+if [[ ${MJUKF_SCALING_KERNELS:-0} == 1 ]]; then run mjukf_kernel_bench kernels; fi
+if [[ ${MJUKF_SCALING_COMPILE:-0} == 1 ]]; then bash scripts/compile_cost.sh "$results/compile_cost.txt"; fi
 
 python3 bench/scaling_report.py "$results" docs/performance-scaling.md
 echo "wrote docs/performance-scaling.md"

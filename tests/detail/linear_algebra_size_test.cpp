@@ -173,16 +173,14 @@ void expectAllAgree(std::mt19937_64& rng) {
   }
 }
 
-// Sizes on both sides of each threshold (double: 9, 11, 20; float: 9, 14, 24, 28) and the chain's
-// largest L = 36 (where Eigen's LLT takes its blocked path, from 32).
+// Sizes on both sides of each threshold (double 9, 11, 20: 8 | 9, 9 | 11, 11 | 20; float 9, 14, 24,
+// 28: 8 | 14, 8 | 14, 14 | 28, 14 | 28) and the chain's largest L = 36 (where Eigen's LLT takes its
+// blocked path, from 32). Few sizes: the unrolled factor costs minutes of compile time at L ≈ 20.
 TEST(LinearAlgebraBySize, GeneralFormsAgreeWithTheWrittenOutOnesDouble) {
   std::mt19937_64 rng(21);
-  expectAllAgree<double, 4>(rng);
   expectAllAgree<double, 8>(rng);
   expectAllAgree<double, 9>(rng);
-  expectAllAgree<double, 10>(rng);
   expectAllAgree<double, 11>(rng);
-  expectAllAgree<double, 19>(rng);
   expectAllAgree<double, 20>(rng);
   expectAllAgree<double, 36>(rng);
 }
@@ -190,18 +188,14 @@ TEST(LinearAlgebraBySize, GeneralFormsAgreeWithTheWrittenOutOnesDouble) {
 TEST(LinearAlgebraBySize, GeneralFormsAgreeWithTheWrittenOutOnesFloat) {
   std::mt19937_64 rng(22);
   expectAllAgree<float, 8>(rng);
-  expectAllAgree<float, 9>(rng);
-  expectAllAgree<float, 13>(rng);
   expectAllAgree<float, 14>(rng);
-  expectAllAgree<float, 23>(rng);
-  expectAllAgree<float, 24>(rng);
   expectAllAgree<float, 28>(rng);
   expectAllAgree<float, 36>(rng);
 }
 
 TEST(LinearAlgebraBySize, BlockedCholeskyRefusesWhatTheUnrolledOneRefuses) {
   expectSameRefusals<double, 4>();
-  expectSameRefusals<double, 20>();
+  expectSameRefusals<double, 11>();
   expectSameRefusals<double, 36>();
   expectSameRefusals<float, 36>();
 }
