@@ -45,6 +45,8 @@ def read(path, default="?"):
 
 
 def fmt_time(ns):
+    if math.isnan(ns):
+        return "–"
     if ns >= 1e4:
         return f"{ns / 1e3:,.1f} µs"
     if ns >= 1e3:
@@ -98,6 +100,10 @@ def kernel_table(kernels, scalar):
     return "\n".join(lines)
 
 
+def fmt(x, digits=2):
+    return "–" if math.isnan(x) else f"{x:.{digits}f}"
+
+
 def main():
     results, output = sys.argv[1], sys.argv[2]
     new = medians(os.path.join(results, "scaling.json"))
@@ -119,6 +125,9 @@ def main():
     w("gives it, the input evaluated once per stage time. Times are medians of 5 repetitions of the")
     w("benchmark thread's CPU time, Release (`-O3`, no `-march`), on the shared 2-core machine: compare")
     w("ratios within one run.\n")
+    options = read(os.path.join(results, "scaling.options"), "")
+    if options:
+        w(f"Options of the runs: {options}.\n")
     w(f"Run at commit `{commit}` (plus the working tree); load average before the runs: "
       f"{read(os.path.join(results, 'scaling.load'))} (kernels chosen by size), "
       f"{read(os.path.join(results, 'scaling_coefficientwise.load'))} (small-size kernels).\n")
@@ -136,19 +145,19 @@ def main():
         if jukf:
             r = jukf[0]
             ratio, old_ratio = r["step"] / r["floor"], r["old"] / r["old_floor"]
-            w(f"| JUKF step/floor at n = 32, p = 4 ≤ 5 | {ratio:.2f} | {old_ratio:.2f} | "
+            w(f"| JUKF step/floor at n = 32, p = 4 ≤ 5 | {fmt(ratio)} | {fmt(old_ratio)} | "
               f"{'met' if ratio <= 5 else '**missed**'} |")
         for key, label in FILTERS:
             for p in (1, 4):
                 e, eo = exponent(rows, key, p, "step"), exponent(rows, key, p, "old")
                 if math.isnan(e):
                     continue
-                w(f"| {label}, p = {p}: cost exponent n = 16 → 32 ≤ 2.4 | {e:.2f} | {eo:.2f} | "
+                w(f"| {label}, p = {p}: cost exponent n = 16 → 32 ≤ 2.4 | {fmt(e)} | {fmt(eo)} | "
                   f"{'met' if e <= 2.4 else '**missed**'} |")
         w("")
-        w("The exponent is log(t₃₂ / t₁₆) / log(L₃₂ / L₁₆) of the step time. The floor itself grows as")
-        w("points × model cost ∝ L · n, i.e. with exponent about 2 for every filter here (the JUKF's")
-        w("L₃₂/L₁₆ = 36/20 against n's 2 makes its floor's exponent about 2.2).\n")
+        w("The exponent is log(t₃₂ / t₁₆) / log(L₃₂ / L₁₆) of the step time. The floor grows as points ×")
+        w("model cost ∝ L · n, so its own exponent (last column of the exponent table) is about 2: an")
+        w("exponent of the step near 2 means a step/floor that hardly grows. \"–\": not measured in this run.\n")
 
         w("## Step, floor and step/floor\n")
         for p in (1, 4):
@@ -161,7 +170,7 @@ def main():
                     continue
                 w(f"| {r['label']} | {r['n']} | {r['L']} | {r['points']} | {fmt_time(r['step'])} | "
                   f"{fmt_time(r['floor'])} | {r['step'] / r['floor']:.2f} | {fmt_time(r['old'])} | "
-                  f"{r['old'] / r['old_floor']:.2f} | {r['old'] / r['step']:.2f} |")
+                  f"{fmt(r['old'] / r['old_floor'])} | {fmt(r['old'] / r['step'])} |")
             w("")
         w("step/floor before divides by the floor measured in the before run (the floor does not depend on")
         w("the kernels; its two measurements differ by the machine's noise).\n")
@@ -174,8 +183,8 @@ def main():
                 by_n = {r["n"]: r for r in rows if r["key"] == key and r["p"] == p}
                 if 16 not in by_n or 32 not in by_n:
                     continue
-                w(f"| {label} | {p} | {by_n[16]['L']} → {by_n[32]['L']} | {exponent(rows, key, p, 'step'):.2f} | "
-                  f"{exponent(rows, key, p, 'old'):.2f} | {exponent(rows, key, p, 'floor'):.2f} |")
+                w(f"| {label} | {p} | {by_n[16]['L']} → {by_n[32]['L']} | {fmt(exponent(rows, key, p, 'step'))} | "
+                  f"{fmt(exponent(rows, key, p, 'old'))} | {fmt(exponent(rows, key, p, 'floor'))} |")
         w("")
 
     if kernels:

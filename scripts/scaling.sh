@@ -28,6 +28,7 @@ if [[ ${MJUKF_SCALING_SKIP_BUILD:-0} != 1 ]]; then
   cmake --build "$build" -j "$jobs" --target "${targets[@]}"
 fi
 
+echo "\`--benchmark_repetitions=5 --benchmark_min_time=${MJUKF_SCALING_MIN_TIME:-0.5}\`" > "$results/scaling.options"
 run() {  # run <program> <name>
   uptime | sed 's/.*load average: //' > "$results/$2.load"
   "$build/bench/$1" --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
