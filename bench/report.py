@@ -133,7 +133,9 @@ def main():
     w("")
     w("How the cost grows with the size of the model (a chain of masses, n = 2 … 32, every filter beside its")
     w("floor, the cost exponent), the kernels chosen by size with the measurements behind their thresholds,")
-    w("and the compile time and memory of a filter: [performance-scaling.md](performance-scaling.md),")
+    scaling_page = "docs/performance-scaling.md"  # linked relative to docs/
+    name = os.path.basename(scaling_page)
+    w(f"and the compile time and memory of a filter: [{name}]({name}),")
     w("written by `scripts/scaling.sh`.")
     w("")
     w(f"Run: {ctx.get('date', '?')} at commit `{commit}` (plus the working tree), {ctx.get('num_cpus', '?')} CPUs at "
