@@ -26,10 +26,11 @@ namespace mjukf::detail {
 // grows as L³ and stops using the vector units well: at L = 36 the outer sums were half of a step. From
 // a size on, each takes Eigen's general form instead: a matrix product (GEMM; for a covariance, from a
 // larger size, one triangle of it), a symmetric rank-k update of one triangle, the blocked LLT. The
-// sizes are the smallest at which the general form measured faster and stayed so (`mjukf_kernel_bench`,
-// each kernel in each form at L = 2 … 16, 20, 24, 28, 32, 36; docs/performance-scaling.md), per scalar
-// type, with one exception: the double Cholesky, whose unrolled form stays 3–7 % faster up to L = 32
-// but whose code and compile time grow as L³, is blocked from 20. The choice is made at compile time on
+// sizes are where the general form measured faster and stayed so (`mjukf_kernel_bench`, each kernel in
+// each form at L = 2 … 16, 20, 24, 28, 32, 36; docs/performance-scaling.md says which are a size or two
+// off the CPU-time border), per scalar type, with one exception: the double Cholesky, whose unrolled
+// form stays up to 10 % faster up to L = 32 but whose code and compile time grow as L³, is blocked from
+// 20. The choice is made at compile time on
 // the fixed size L (for a point set, of its 2L + 1 or 2L points). MJUKF_GENERAL_KERNELS_FROM overrides
 // them all (scripts/scaling.sh builds the small-size kernels at every size with it).
 struct GeneralKernelSizes {
