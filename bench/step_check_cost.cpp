@@ -1,10 +1,14 @@
-// mjukf_step_check_cost: what the step check (step_check.hpp) costs a measurement step. The step is that
-// of the step benchmarks (step_cases.hpp): the tank's UKF with the paper's settings, a time update over
+// mjukf_step_check_cost: what the step check (step_check.hpp) and the health monitor (health.hpp) cost a
+// measurement step. The step is that of the step benchmarks (step_cases.hpp): the tank's UKF with the
+// paper's settings, a time update over
 // one integrator step (h = 1 ms, I-TR-BDF2) followed by a measurement update, on simulated
-// measurements. Three copies of it differ only in `stepCheck`:
-//   default: the library's default (Refuse, tolerance 0.5, a step unchanged is checked every 16 calls);
-//   every:   the same with interval = 1, every call checked (the cost when h changes at every call);
-//   accept:  OversizedStep::Accept, no check (the filters before the check).
+// measurements. Four copies of it differ only in `stepCheck` and `health`:
+//   default:     the library's defaults (Refuse, tolerance 0.5, a step unchanged is checked every 16
+//                calls; the monitor on);
+//   every:       the step check with interval = 1, every call checked (the cost when h changes at every call);
+//   accept:      OversizedStep::Accept, no check (the filters before the check);
+//   unmonitored: the default check with `health.enabled = false`.
+// The monitor's cost is default / unmonitored, per repetition.
 // Each repetition runs kSteps steps of each copy from the same start, in an order that rotates from one
 // repetition to the next, and times each run in thread CPU time; the ratio of a repetition is its
 // run's time over the same repetition's `accept` run. Prints the median of the ratios (and their range)
@@ -39,10 +43,11 @@ double threadSeconds() {
   return double(now.tv_sec) + 1e-9 * double(now.tv_nsec);
 }
 
-Filter makeUkf(OversizedStep onOversized, int interval) {
+Filter makeUkf(OversizedStep onOversized, int interval, bool monitored = true) {
   auto settings = Tank::ukf();
   settings.stepCheck.onOversized = onOversized;
   settings.stepCheck.interval = interval;
+  settings.health.enabled = monitored;
   return Filter(Tank::Model(), Tank::initialState(), Tank::Model::trueParameters(), settings);
 }
 
@@ -79,14 +84,14 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: mjukf_step_check_cost [repetitions >= 1]\n");
     return 64;
   }
-  constexpr int kCases = 3;
-  const char* names[kCases] = {"default", "every", "accept"};
+  constexpr int kCases = 4, kAccept = 2, kUnmonitored = 3;
+  const char* names[kCases] = {"default", "every", "accept", "unmonitored"};
   const Filter fresh[kCases] = {makeUkf(OversizedStep::Refuse, 16), makeUkf(OversizedStep::Refuse, 1),
-                                makeUkf(OversizedStep::Accept, 16)};
+                                makeUkf(OversizedStep::Accept, 16), makeUkf(OversizedStep::Refuse, 16, false)};
   (void)measurements<Tank>();  // simulated once, outside the timed runs
   double sink = 0;
   for (const Filter& f : fresh) (void)run(f, sink);  // warm-up
-  std::vector<double> seconds[kCases], ratios[kCases];
+  std::vector<double> seconds[kCases], ratios[kCases], monitor;
   for (int r = 0; r < repetitions; ++r) {
     double t[kCases];
     for (int i = 0; i < kCases; ++i) {
@@ -99,8 +104,9 @@ int main(int argc, char** argv) {
     }
     for (int c = 0; c < kCases; ++c) {
       seconds[c].push_back(t[c]);
-      ratios[c].push_back(t[c] / t[kCases - 1]);
+      ratios[c].push_back(t[c] / t[kAccept]);
     }
+    monitor.push_back(t[0] / t[kUnmonitored]);
   }
   std::printf("%d repetitions of %ld measurement steps (tank UKF, h = 1 ms), thread CPU time (checksum %g)\n",
               repetitions, kSteps, sink);
@@ -109,5 +115,7 @@ int main(int argc, char** argv) {
     std::printf("%-8s median %7.1f ns/step   ratio to accept: median %.4f (range %.4f to %.4f)\n", names[c],
                 1e9 * median(seconds[c]) / double(kSteps), median(ratios[c]), *low, *high);
   }
+  const auto [low, high] = std::minmax_element(monitor.begin(), monitor.end());
+  std::printf("the monitor: default / unmonitored median %.4f (range %.4f to %.4f)\n", median(monitor), *low, *high);
   return 0;
 }

@@ -6,7 +6,8 @@
 #   2. the firmware example built for a Cortex-M4F and run under QEMU, its estimates compared with the
 #      host's (scripts/embedded.sh, docs/embedded.md); MJUKF_SKIP_EMBEDDED=1 skips it;
 #   3. the same suite built with clang, AddressSanitizer and UndefinedBehaviorSanitizer (preset
-#      `asan-ubsan`, in <build-dir>-asan), then the libFuzzer target of that build on the inputs that
+#      `asan-ubsan`, in <build-dir>-asan; without the allocation, compile-only and compiler-flag tests,
+#      MJUKF_SANITIZER_SUBSET in tests/CMakeLists.txt), then the libFuzzer target of that build on the inputs that
 #      once failed and a short smoke run (docs/robustness.md records the long run).
 # MJUKF_SKIP_SANITIZERS=1 skips step 3.
 set -euo pipefail

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "drifting_walk.hpp"
 #include "mjukf/health.hpp"
 #include "mjukf/mjukf.hpp"
 
@@ -77,6 +78,24 @@ TEST(HealthMonitor, AParameterMovingFarBeyondItsSigmaIsARunaway) {
   EXPECT_EQ(feed(1.0, 0.0, 500, 0.1).health(), Health::Ok);
 }
 
+TEST(HealthMonitor, AnUnboundedSigmaIsARunaway) {
+  // The MJUKF reports σ = +∞ once the error covariance it follows has overflowed.
+  mjukf::HealthSettings<double> settings;
+  Monitor monitor(settings);
+  const Eigen::Matrix2d covariance = Eigen::Matrix2d::Identity();
+  std::mt19937_64 rng(4);
+  std::normal_distribution<double> normal;
+  for (int k = 0; k < 100; ++k) {
+    const Eigen::Vector2d e(normal(rng), normal(rng));
+    const Param1 sigma(k < 60 ? 1.0 : kInf);
+    monitor.observeUpdate(e, covariance, e.squaredNorm(), nullptr, Param1(0), sigma, Param1(-kInf), Param1(kInf));
+    if (k == 49) {
+      EXPECT_EQ(monitor.health(), Health::Ok);
+    }
+  }
+  EXPECT_EQ(monitor.health(), Health::ParameterRunaway);
+}
+
 TEST(HealthMonitor, TheVerdictFollowsTheLastBlockAndTheFirstAlarmStays) {
   mjukf::HealthSettings<double> settings;
   Monitor monitor(settings);
@@ -132,18 +151,7 @@ TEST(HealthMonitor, RefusedMeasurementsCountAcrossTakenTimeUpdates) {
 // ---------------------------------------------------------------------------------------------------
 // The filters: a scalar random walk with a drift θ per step, measured with noise: x⁺ = x + θ + w, y = x + v.
 
-struct RandomWalk {
-  using Scalar = double;
-  static constexpr int StateDim = 1, ParamDim = 1, MeasDim = 1, InputDim = 0;
-  using State = Eigen::Matrix<double, 1, 1>;
-  using Param = Eigen::Matrix<double, 1, 1>;
-  using Meas = Eigen::Matrix<double, 1, 1>;
-  using Input = Eigen::Matrix<double, 0, 1>;
-  State transition(double, double, const State& x, const Input&, const Param& theta) const {
-    return State(x(0) + theta(0));
-  }
-  Meas measurement(const State& x, const Param&) const { return Meas(x(0)); }
-};
+using RandomWalk = mjukf::testing::DriftingWalk<>;
 constexpr double kQ = 0.01, kR = 0.04;
 
 // The plant with drift `theta`, and a filter of type F whose settings `configure` sets; `rScale` is the

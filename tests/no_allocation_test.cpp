@@ -115,6 +115,17 @@ struct Automatic {
   }
 };
 
+// `Base`'s hand-tuned MJUKF following the covariance of θ̂ (the presets, the paper's, do not).
+template <class Base>
+struct FollowingParameterCovariance {
+  static auto make() {
+    const auto paper = Base::make();
+    auto s = paper.settings();
+    s.followParameterCovariance = true;
+    return std::decay_t<decltype(paper)>(paper.model(), paper.state(), paper.parameters(), s);
+  }
+};
+
 // `Base` with α = 0.5 (β = 2, κ = 0): the centre point's covariance weight is negative (Wc₀ = −0.25 for
 // L = 6), which the square-root form applies as a rank-one downdate.
 template <class Base>
@@ -157,6 +168,8 @@ using Cases = ::testing::Types<
     Automatic<Case<mjukf::ModifiedJointUkf, RobotF>>, Automatic<DiscreteCase<mjukf::ModifiedJointUkf, double>>,
     Automatic<DiscreteCase<mjukf::ModifiedJointUkf, float>>, Automatic<Case2019<mjukf::ModifiedJointUkf, VanDerPol>>,
     Automatic<Case2019<mjukf::ModifiedJointUkf, Lorenz>>,
+    FollowingParameterCovariance<Case<mjukf::ModifiedJointUkf, Robot>>,
+    FollowingParameterCovariance<DiscreteCase<mjukf::ModifiedJointUkf, float>>,
     // The square-root form (covariance_form.hpp).
     Case<SquareRoot<mjukf::Ukf>::Filter, Robot>, Case<SquareRoot<mjukf::JointUkf>::Filter, Robot>,
     Case<SquareRoot<mjukf::ModifiedJointUkf>::Filter, Tank>, Case<SquareRoot<mjukf::JointUkf>::Filter, RobotF>,

@@ -32,7 +32,8 @@ enum class Health : unsigned char {
   /// a change of a parameter the filter does not follow.
   InnovationsCorrelated,
   /// Within one block a parameter estimate moved by more than `runawaySigmas` of its own standard
-  /// deviation at the block's start: it is running away, not converging.
+  /// deviation at the block's start, or its standard deviation is unbounded at the block's end: it is
+  /// running away, not converging.
   ParameterRunaway,
   /// A parameter estimate ended a block on one of its `parameterBounds`: the data pull it beyond what
   /// the bounds allow.
@@ -71,7 +72,8 @@ struct HealthSettings {
   /// of 10⁴ updates (200 blocks) of a consistent filter raises a false alarm with probability ≈ 6e-4.
   Scalar falseAlarmProbability = Scalar(1e-6);
   /// A parameter moving more than this many of its standard deviations within a block is running
-  /// away; > 0. Only filters that report a parameter covariance (JointUkf, DualUkf) run this test.
+  /// away; > 0. Only filters that report a parameter covariance (JointUkf, DualUkf, an MJUKF that
+  /// follows its own) run this test.
   Scalar runawaySigmas = Scalar(10);
   /// Refused calls in a row that raise `RepeatedRefusals`, ≥ 1.
   int refusalStreak = 10;
@@ -225,7 +227,7 @@ class HealthMonitor {
       previousPresent_(i) = true;
     }
     if (++updatesInBlock_ < settings_.window) return;
-    testBlock(parameters, lowerBound, upperBound);
+    testBlock(parameters, parameterSigma, lowerBound, upperBound);
     startBlock();
     blockStartParameters_ = parameters;
     blockStartSigma_ = parameterSigma;
@@ -242,7 +244,8 @@ class HealthMonitor {
     return Scalar(dof) * root * root * root;
   }
 
-  void testBlock(const Param& parameters, const Param& lowerBound, const Param& upperBound) {
+  void testBlock(const Param& parameters, const Param& parameterSigma, const Param& lowerBound,
+                 const Param& upperBound) {
     ++stats_.blocks;
     Health verdict = Health::Ok;
     // Innovation consistency: the block's NIS sum against χ²(dof) at both tails.
@@ -277,6 +280,10 @@ class HealthMonitor {
     }
     stats_.parameterMotionSigmas = motion;
     if (verdict == Health::Ok && !(motion <= settings_.runawaySigmas)) verdict = Health::ParameterRunaway;
+    // A σ that has become unbounded (the MJUKF's, when the error covariance it follows overflowed).
+    for (int j = 0; j < ParamDim; ++j)
+      if (verdict == Health::Ok && parameterSigma(j) == std::numeric_limits<Scalar>::infinity())
+        verdict = Health::ParameterRunaway;
     if (verdict == Health::Ok) {
       for (int j = 0; j < ParamDim; ++j) {
         const bool bounded = lowerBound(j) > -std::numeric_limits<Scalar>::infinity() ||

@@ -19,6 +19,7 @@
 #include "mjukf/modified_joint_ukf.hpp"
 #include "mjukf/parameter_bounds.hpp"
 #include "mjukf/parameter_sensitivity.hpp"
+#include "mjukf/recovery.hpp"
 #include "mjukf/result.hpp"
 #include "mjukf/settings_error.hpp"
 #include "mjukf/sigma_points.hpp"

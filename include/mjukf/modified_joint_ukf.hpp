@@ -9,6 +9,7 @@
 
 #include <Eigen/Core>
 
+#include "mjukf/detail/parameter_error_covariance.hpp"
 #include "mjukf/detail/unscented_engine.hpp"
 #include "mjukf/detail/validation.hpp"
 #include "mjukf/filter_settings.hpp"
@@ -102,6 +103,13 @@ struct ModifiedJointUkfSettings : ParameterEstimationSettings<Scalar_, StateDim,
   /// time update (p extra propagations each) and kept in between; 0: once, at the first time update.
   /// Must be ≥ 0, checked even with both modes off.
   int sensitivityInterval = 1;
+  /// true (the default): the filter follows the covariance of θ̂, `parameterCovariance()`
+  /// (docs/algorithms.md §5.1), from which the health monitor judges the parameters' motion. It needs
+  /// the sensitivities W and ψ that the automatic modes follow anyway; with both modes off it costs p
+  /// extra propagations at every `sensitivityInterval`-th time update, and every measurement update n
+  /// evaluations of g. false: the paper's MJUKF and its cost (the paper presets), and
+  /// `parameterCovariance()` is NaN, unknown.
+  bool followParameterCovariance = true;
 };
 
 /// \cond INTERNAL
@@ -125,10 +133,12 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
                 "theta_i (the cubature set has 2n)");
   using Transformation = Eigen::Matrix<Scalar, ParamDim, MeasDim>;
   using ParamPoints = Eigen::Matrix<Scalar, ParamDim, Count>;
+  using ParamMatrix = Eigen::Matrix<Scalar, ParamDim, ParamDim>;
   using Sensitivity = ParameterSensitivity<Scalar, StateDim, MeasDim, ParamDim>;
 
   ModifiedJointParameters(const Settings& settings, const Param& initialParameters)
-      : automatic_(settings.automaticTransformation || settings.adaptiveScaling),
+      : followsSensitivities_(settings.automaticTransformation || settings.adaptiveScaling ||
+                              settings.followParameterCovariance),
         boundsActive_(settings.parameterBounds.active()) {
     spread(settings, initialParameters);
   }
@@ -138,14 +148,19 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   const Transformation& lastTransformation() const { return transformation_; }
   const Param& lastScalings() const { return scalings_; }
   const Sensitivity& sensitivity() const { return sensitivity_; }
+  ParamMatrix covariance() const {
+    return followsSensitivities_ ? errorCovariance_.parameterCovariance()
+                                 : ParamMatrix::Constant(std::numeric_limits<Scalar>::quiet_NaN());
+  }
 
   // Eq. 8: θᵢ = θ̂₀ − p_θ (n + 1) + p_θ (i + 1), i = 0 … 2n; their mean is θ̂₀. The automatic modes
-  // start knowing each parameter to about the larger of its size and the half-width of the θᵢ.
+  // and P_θ start knowing each parameter to about the larger of its size and the half-width of the θᵢ.
   void spread(const Settings& s, const Param& center) {
     Param scale = center.cwiseAbs().cwiseMax(s.parameterSpread.cwiseAbs() * Scalar(StateDim + 1));
     for (int r = 0; r < ParamDim; ++r)
       if (!(scale(r) > Scalar(0))) scale(r) = Scalar(1);
     sensitivity_.start(scale, s.measurementNoise);
+    errorCovariance_.start(s.initialCovariance, scale.array().square().matrix().asDiagonal());
     timeUpdates_ = 0;
     transformation_.setZero();
     scalings_.setZero();
@@ -155,8 +170,11 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
     if (boundsActive_)
       for (int i = 0; i < Count; ++i) s.parameterBounds.clamp(parameterPoints_.col(i));
   }
-  // A new state estimate that does not depend on θ̂ (reset of the state alone): W = 0.
-  void restartState() { sensitivity_.restartState(); }
+  // A new state estimate of covariance P that does not depend on θ̂ (reset of the state alone): W = 0.
+  void restartState(const typename Settings::StateMatrix& covariance) {
+    sensitivity_.restartState();
+    errorCovariance_.restartState(covariance);
+  }
 
   // What the parameter part has learnt (the filter's ParameterKnowledge), and a new pass from it: the
   // sensitivities' schedule restarts as at construction (a refresh at the first time update, W = 0).
@@ -166,17 +184,19 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
     Sensitivity sensitivity;
     Transformation transformation;
     Param scalings;
+    ParamMatrix covariance;
   };
   Knowledge knowledge() const {
-    return Knowledge{parameters_, parameterPoints_, sensitivity_, transformation_, scalings_};
+    return Knowledge{parameters_, parameterPoints_, sensitivity_, transformation_, scalings_, covariance()};
   }
-  void startPass(const Knowledge& k) {
+  void startPass(const Knowledge& k, const typename Settings::StateMatrix& stateCovariance) {
     parameters_ = k.parameters;
     parameterPoints_ = k.parameterPoints;
     sensitivity_ = k.sensitivity;
     sensitivity_.restartPass();
     transformation_ = k.transformation;
     scalings_ = k.scalings;
+    errorCovariance_.start(stateCovariance, k.covariance);
     timeUpdates_ = 0;
   }
 
@@ -188,17 +208,24 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   // about point 0 (χ₀ = x̂ with θ₀), whose propagation is the nominal of the forward differences.
   template <class Step>
   void propagatePoints(const Step& step, Points& points) {
-    const State x0 = points.col(0);
+    if (followsSensitivities_) priorPoints_ = points;
     for (int i = 0; i < Count; ++i) {
       const Param theta = parameterPoints_.col(i);
       points.col(i) = step.propagate(theta, points.col(i));
     }
-    if (!automatic_) return;
+    if (!followsSensitivities_) return;
     const int every = step.settings.sensitivityInterval;
     const bool refreshDue = every == 0 ? timeUpdates_ == 0 : timeUpdates_ % every == 0;
-    if (!refreshDue) return sensitivity_.keepPrediction(step.interval());
-    sensitivity_.predict(x0, parameterPoints_.col(0), points.col(0), step.interval(),
-                         [&](const State& x, const Param& theta) { return step.propagate(theta, x); });
+    const typename Sensitivity::StateSensitivity before = sensitivity_.stateSensitivity();
+    if (refreshDue)
+      sensitivity_.predict(priorPoints_.col(0), parameterPoints_.col(0), points.col(0), step.interval(),
+                           [&](const State& x, const Param& theta) { return step.propagate(theta, x); });
+    else
+      sensitivity_.keepPrediction(step.interval());
+    errorCovariance_.predict(priorPoints_, points, parameterPoints_, before,
+                             refreshDue ? &sensitivity_.derivative() : nullptr,
+                             sensitivity_.candidateStateSensitivity(), step.settings.processNoise,
+                             refreshDue ? sensitivity_.extrapolation() : Scalar(1));
   }
   template <class Step>
   Vector propagateMean(const Step& step, const Vector& mean) {
@@ -218,7 +245,7 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   // with one ξ (the paper) or, in the automatic modes, T and one ξ per parameter from the sensitivities.
   Status correctParameters(const typename Base::CorrectionOf& c) {
     const Settings& s = c.settings;
-    if (automatic_) {
+    if (followsSensitivities_) {
       const Scalar memory = s.adaptiveScaling ? s.convergenceTime : std::numeric_limits<Scalar>::infinity();
       const Scalar updates = s.adaptiveScaling ? s.minimumMemoryUpdates : std::numeric_limits<Scalar>::infinity();
       const auto measure = [&c](const State& x, const Param& theta) {
@@ -244,36 +271,65 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
         for (int j = 0; j < MeasDim; ++j)
           if (!(*c.present)(j)) errors_(j, i) = Scalar(0);
     }
-    // Eq. 9 for every point at once, diag(ξ) T (y − Yᵢ): each parameter's ξ scales its row of T.
-    steps_.noalias() = (candidateScalings_.asDiagonal() * candidateTransformation_).lazyProduct(errors_);
+    // Eq. 9 for every point at once, G (y − Yᵢ) with the gain G = diag(ξ) T: each parameter's ξ scales
+    // its row of T.
+    gain_.noalias() = candidateScalings_.asDiagonal() * candidateTransformation_;
+    steps_.noalias() = gain_.lazyProduct(errors_);
     for (int i = 0; i < Count; ++i) {
       candidateParameterPoints_.col(i) = parameters_ - steps_.col(i);
       if (boundsActive_) s.parameterBounds.clamp(candidateParameterPoints_.col(i));
     }
     candidateParameters_ = candidateParameterPoints_.rowwise().sum() / Scalar(Count);  // eq. 10
     if (!allFinite(candidateParameterPoints_) || !allFinite(candidateParameters_)) return Status::NonFiniteResult;
+    if (followsSensitivities_) correctErrorCovariance(c);  // never refuses: an unbounded P_θ is reported
     return Status::Ok;
   }
   void constrainMean(Vector&) {}
 
   void commitPrediction() {
-    if (!automatic_) return;
+    if (!followsSensitivities_) return;
+    errorCovariance_.commit();
     sensitivity_.commitPrediction();
     ++timeUpdates_;
   }
   void commitCorrection() {
     parameters_ = candidateParameters_;
     parameterPoints_ = candidateParameterPoints_;
-    if (!automatic_) return;
+    if (!followsSensitivities_) return;
+    errorCovariance_.commit();
     sensitivity_.commitCorrection();
     transformation_ = candidateTransformation_;
     scalings_ = candidateScalings_;
   }
   void commitOpenLoop(Scalar interval) {
-    if (automatic_) sensitivity_.commitOpenLoop(interval);
+    if (followsSensitivities_) sensitivity_.commitOpenLoop(interval);
   }
 
  private:
+  // The covariance of θ̂ (detail/parameter_error_covariance.hpp) with this update's gains: K = U S⁻¹, G = diag(ξ) T,
+  // and H = ∂g/∂x at (x̂⁻, θ̂) by forward differences, one measurement per state.
+  template <class Correction>
+  void correctErrorCovariance(const Correction& c) {
+    const Scalar root = std::sqrt(std::numeric_limits<Scalar>::epsilon());
+    const Meas nominal = measureModel(c.model, State(c.priorMean), c.input, parameters_);
+    const auto& prior = errorCovariance_.committed();  // the prediction, committed by the time update
+    for (int i = 0; i < StateDim; ++i) {
+      Scalar size = std::max(std::abs(c.priorMean(i)), std::sqrt(std::abs(prior(i, i))));
+      if (!(size > Scalar(0)) || !std::isfinite(size)) size = Scalar(1);
+      State moved = c.priorMean;
+      moved(i) += root * size;
+      measurementJacobian_.col(i) = (measureModel(c.model, moved, c.input, parameters_) - nominal) / (root * size);
+    }
+    if (c.present)
+      for (int j = 0; j < MeasDim; ++j)
+        if (!(*c.present)(j)) measurementJacobian_.row(j).setZero();
+    stateGainTransposed_ = c.gainFactor.transpose();
+    detail::solveUpperInPlace(c.innovationFactor, stateGainTransposed_);  // Kᵀ = S⁻ᵀ Uᵀ
+    errorCovariance_.correct(measurementJacobian_, stateGainTransposed_.transpose(), gain_,
+                             sensitivity_.candidateMeasurementSensitivity(), sensitivity_.candidateStateSensitivity(),
+                             c.settings.measurementNoise);
+  }
+
   // T with the columns of missing components zeroed and each row rescaled to Σⱼ |tᵣⱼ| = 1 (eq. 14).
   void reduceToPresent(const MeasurementMask<MeasDim>& present) {
     const Transformation t = candidateTransformation_;
@@ -286,7 +342,7 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
     }
   }
 
-  bool automatic_;
+  bool followsSensitivities_;  // an automatic mode or followParameterCovariance: W, ψ and P_θ followed
   bool boundsActive_;
   Param parameters_ = Param::Zero();                   // θ̂
   ParamPoints parameterPoints_ = ParamPoints::Zero();  // θᵢ
@@ -295,6 +351,12 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   ParamPoints candidateParameterPoints_ = ParamPoints::Zero();
   Eigen::Matrix<Scalar, MeasDim, Count> errors_ = Eigen::Matrix<Scalar, MeasDim, Count>::Zero();  // y − Yᵢ
   ParamPoints steps_ = ParamPoints::Zero();                                                       // ξ T (y − Yᵢ)
+  Transformation gain_ = Transformation::Zero();                                                  // G = diag(ξ) T
+  // cov((η, θ̂ − θ)) (detail/parameter_error_covariance.hpp), and the workspace of its update.
+  detail::ParameterErrorCovariance<Scalar, StateDim, MeasDim, ParamDim> errorCovariance_;
+  Points priorPoints_ = Points::Zero();
+  Eigen::Matrix<Scalar, MeasDim, StateDim> measurementJacobian_ = Eigen::Matrix<Scalar, MeasDim, StateDim>::Zero();
+  Eigen::Matrix<Scalar, MeasDim, StateDim> stateGainTransposed_ = Eigen::Matrix<Scalar, MeasDim, StateDim>::Zero();
   // The automatic modes (committed with the parameters).
   Sensitivity sensitivity_;
   long timeUpdates_ = 0;
@@ -406,8 +468,13 @@ class ModifiedJointUkf
     return this->settings_.adaptiveScaling ? this->policy_.lastScalings() : Param(this->settings_.scaling);
   }
   /// What the automatic modes know (W = ∂x̂/∂θ̂, ψ = ∂ŷ/∂θ̂ of the last update, the information about
-  /// θ); not followed, and zero, when neither mode is on.
+  /// θ); not followed, and zero, when neither mode is on and `followParameterCovariance` is false.
   const Sensitivity& sensitivity() const { return this->policy_.sensitivity(); }
+  /// P_θ, the covariance of θ̂ (p × p; docs/algorithms.md §5.1): the first-order covariance of θ̂'s
+  /// error through the gains this filter used, from the prior diag(sᵣ²), sᵣ the larger of |θ̂₀ᵣ| and
+  /// (n + 1)|p_θᵣ|. It takes θ as constant and the model as right; NaN (unknown) when
+  /// `followParameterCovariance` and both automatic modes are off.
+  Eigen::Matrix<Scalar, ParamDim, ParamDim> parameterCovariance() const { return this->policy_.covariance(); }
 
   /// Starts again from (state, covariance), keeping θ̂ and the θᵢ (and, in the automatic modes, the
   /// information about θ; the new state does not depend on θ̂, W = 0). When one is not finite or the
@@ -418,7 +485,7 @@ class ModifiedJointUkf
     if (SettingsError e = detail::requireFinite(kOwner, "state", state)) return detail::report(e);
     if (SettingsError e = Engine::checkResetCovariance(kOwner, covariance)) return detail::report(e);
     this->resetEstimate(state, covariance);
-    this->policy_.restartState();
+    this->policy_.restartState(covariance);
     return ResetResult();
   }
   /// Everything the filter has learnt about θ, carried from one pass over a record to the next
@@ -451,7 +518,7 @@ class ModifiedJointUkf
       return detail::report(e);
     if (SettingsError e = Engine::checkResetCovariance(kOwner, covariance)) return detail::report(e);
     this->resetEstimate(state, covariance);
-    this->policy_.startPass(knowledge);
+    this->policy_.startPass(knowledge, covariance);
     this->restartTime(startTime);
     return ResetResult();
   }
@@ -465,6 +532,7 @@ class ModifiedJointUkf
     if (SettingsError e = Engine::checkResetCovariance(kOwner, covariance)) return detail::report(e);
     this->resetEstimate(state, covariance);
     this->policy_.spread(this->settings_, parameters);
+    this->policy_.restartState(covariance);
     return ResetResult();
   }
 

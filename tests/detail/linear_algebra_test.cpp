@@ -8,6 +8,7 @@
 #include <random>
 
 #include <Eigen/Cholesky>
+#include <Eigen/LU>
 #include <gtest/gtest.h>
 
 #include "mjukf/detail/linear_algebra.hpp"
@@ -68,6 +69,34 @@ TEST(LinearAlgebra, TriangularSolvesInvertTheFactor) {
   Eigen::Matrix<double, 3, 4> u = c;
   mjukf::detail::whitenColumns(s, u);
   EXPECT_LT((u * s.transpose() - c).cwiseAbs().maxCoeff(), 100 * kEps);
+}
+
+// The MJUKF's θ̂ covariance solves A M = C through M's partial-pivoting LU. Backward stable (Higham,
+// Accuracy and Stability of Numerical Algorithms, Thm 9.4): (M + ΔM) X = B with |ΔM| ≤ γ₃ₙ Pᵀ|L||U|,
+// so |M X − B| ≤ γ₃ₙ Pᵀ|L||U| |X|; a permuted M makes the pivoting matter.
+TEST(LinearAlgebra, LuSolveIsBackwardStable) {
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> normal;
+  constexpr int N = 6;
+  for (int trial = 0; trial < 20; ++trial) {
+    Eigen::Matrix<double, N, N> m;
+    Eigen::Matrix<double, N, 3> b;
+    for (double& v : m.reshaped()) v = normal(rng);
+    for (double& v : b.reshaped()) v = normal(rng);
+    m.row(0).swap(m.row(N - 1));
+    const Eigen::PartialPivLU<Eigen::Matrix<double, N, N>> lu(m);
+    Eigen::Matrix<double, N, 3> x = b;
+    mjukf::detail::luSolveInPlace(lu, x);
+    const Eigen::Matrix<double, N, N> lower = lu.matrixLU().template triangularView<Eigen::UnitLower>();
+    const Eigen::Matrix<double, N, N> upper = lu.matrixLU().template triangularView<Eigen::Upper>();
+    // The residual in long double, so that its own rounding does not count against the bound.
+    using Wide = Eigen::Matrix<long double, N, 3>;
+    const Wide residual = (m.cast<long double>() * x.cast<long double>() - b.cast<long double>()).cwiseAbs();
+    const double gamma = 3 * N * kEps / (1 - 3 * N * kEps);
+    const Eigen::Matrix<double, N, 3> bound =
+        gamma * (lu.permutationP().transpose() * (lower.cwiseAbs() * upper.cwiseAbs())) * x.cwiseAbs();
+    EXPECT_TRUE((residual.array() <= bound.cast<long double>().array()).all()) << trial;
+  }
 }
 
 TEST(LinearAlgebra, SymmetrizeAveragesTheTwoTrianglesAndKeepsTheDiagonal) {

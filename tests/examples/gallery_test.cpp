@@ -71,8 +71,9 @@ TEST(Gallery, ShortStudyOfEachPlant) {
       EXPECT_NE(r.output.find(filter), std::string::npos) << plant.slug << "\n" << r.output;
     const auto rows = readCsv(dir + "/" + plant.slug + "_study.csv");
     ASSERT_EQ(rows.size(), 1u + 2 * 3) << plant.slug;
-    // seed, filter, scenario; 2 RMSEs; 5; 2 finals; the final NEES of θ̂; the health at the end
-    ASSERT_EQ(rows[0].size(), 3u + 2 + 5 + 2 + 1 + 1) << plant.slug;
+    // seed, filter, scenario; 2 RMSEs; 5; 2 finals; the final NEES of θ̂; the health at the end; the
+    // updates from a forced fault to the first alarm
+    ASSERT_EQ(rows[0].size(), 3u + 2 + 5 + 2 + 1 + 1 + 1) << plant.slug;
     EXPECT_EQ(rows[1][0] + "," + rows[1][1], "1,jukf") << plant.slug;
     EXPECT_EQ(rows[1][5], "0") << plant.slug << ": JUKF diverged on seed 1";
     EXPECT_EQ(rows[1][6], "ok") << plant.slug;
@@ -121,6 +122,25 @@ TEST(Gallery, SnrIsRefusedAndMjukfIsTheAutomaticPreset) {
   ASSERT_EQ(rows.size(), 3u);
   rows[1][1] = rows[2][1] = "";  // the filter's name is all that differs
   EXPECT_EQ(rows[1], rows[2]);
+}
+
+// A forced fault (study --scenarios small-q): the DC motor's JUKF with Q ten thousand times too small
+// ends far from the truth, and the health monitor says so in its first block of 50 updates, the delay
+// column counting from the fault (at the start) to that first alarm; none is unflagged.
+TEST(Gallery, AForcedFaultIsFlaggedInTheFirstBlock) {
+  const std::string dir = scratch("forced");
+  const Result r =
+      run(kGallery + " dc_motor study --seeds 1-3 --filters jukf --scenarios small-q --out-dir " + shellQuote(dir));
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  const auto line = r.output.find("\njukf ");
+  ASSERT_NE(line, std::string::npos) << r.output;
+  const std::string row = r.output.substr(line + 1, r.output.find('\n', line + 1) - line - 1);
+  EXPECT_NE(row.find(" 3/3      3/3      0 "), std::string::npos) << row;  // diverged, alarm, unflagged
+  EXPECT_NE(row.find("fault to first alarm, diverged runs: median 49 [49, 49] updates"), std::string::npos) << row;
+  const auto rows = readCsv(dir + "/dc_motor_study.csv");
+  ASSERT_EQ(rows.size(), 4u);
+  EXPECT_EQ(rows[0].back(), "updates_to_alarm");
+  for (std::size_t k = 1; k < rows.size(); ++k) EXPECT_EQ(rows[k].back(), "49") << k;
 }
 
 }  // namespace

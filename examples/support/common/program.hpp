@@ -49,8 +49,7 @@ void printUsage(std::ostream& out) {
         << "      paper_" << Plant::slug << ").\n"
         << "      --duration S is the length of the simulated runs (refused when every data set is a file).\n"
         << "\n";
-  out << "  study [--seeds LIST] [--filters LIST] " << (change ? "[--scenarios static,change] " : "")
-      << "[--jobs N] [--out-dir DIR] [--duration S]\n"
+  out << "  study [--seeds LIST] [--filters LIST] [--scenarios LIST] [--jobs N] [--out-dir DIR] [--duration S]\n"
       << "      The filters over many noise draws, one simulation per seed (default 1-20; ranges and lists such\n"
       << "      as 1-100 or 1,5,9-12), --jobs threads (default: every core; the results do not depend on it).\n"
       << "      Filters: jukf, mjukf, dual"
@@ -60,6 +59,10 @@ void printUsage(std::ostream& out) {
       << Plant::slug << "_study.csv\n"
       << "      (one row per seed x filter: RMSEs, diverged, status), a table of mean +- sd and median per filter\n"
       << "      and a box plot per scenario (default DIR study_" << Plant::slug << "). docs/studies.md.\n"
+      << "      Scenarios (default static): static" << (change ? ", change (the parameter change)" : "")
+      << ", and faults forced on\n"
+      << "      the filters: jump (every parameter x1.25 halfway, which constant-parameter presets cannot follow),\n"
+      << "      sensor-gain (the data's y x1.1), small-q (every filter's Q of the state x1e-4).\n"
       << "\n"
       << "Output files are written under temporary names and put in place only when the whole run has\n"
       << "succeeded: a run that fails or is stopped replaces nothing and leaves no partial file.\n"

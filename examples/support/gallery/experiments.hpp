@@ -19,6 +19,9 @@
 ///   subcommand's MJUKF filters, `mjukf` and `mjukf-auto`, are this automatic preset: a hand-tuned
 ///   MJUKF has no meaning for the gallery.
 /// - The UKF (estimating no parameters) takes the state's settings.
+/// - Every filter that estimates θ bounds it below by 0 (`parameterBounds.lower`): each gallery
+///   parameter is a physical magnitude (a gain, a friction, a resistance, a rate, a conductance), and a
+///   user knows its sign. An estimate held at 0 raises the health monitor's ParameterAtBound.
 ///
 /// α, β, κ are the library's defaults everywhere. The simulated plant has no process noise; its
 /// measurements carry white Gaussian noise of the stated standard deviation.
@@ -82,6 +85,7 @@ struct GalleryExperiment {
     s.initialCovariance.diagonal() << stateInitialVariance(), parameterInitialVariance();
     s.processNoise.diagonal() << stateProcessNoise(), Scalar(kParameterNoiseFraction) * parameterInitialVariance();
     s.measurementNoise.diagonal() = measurementVariance();
+    s.parameterBounds.lower.setZero();  // θ ≥ 0
     return s;
   }
 
@@ -91,6 +95,7 @@ struct GalleryExperiment {
     setStateCovariances(s);
     s.automaticTransformation = true;
     s.adaptiveScaling = true;
+    s.parameterBounds.lower.setZero();  // θ ≥ 0
     return s;
   }
 
@@ -101,6 +106,7 @@ struct GalleryExperiment {
     setStateCovariances(s);
     s.initialParameterCovariance.diagonal() = parameterInitialVariance();
     s.parameterProcessNoise.diagonal() = Scalar(kParameterNoiseFraction) * parameterInitialVariance();
+    s.parameterBounds.lower.setZero();  // θ ≥ 0
     return s;
   }
 

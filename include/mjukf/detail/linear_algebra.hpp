@@ -192,6 +192,22 @@ void solveUpperInPlace(const Lower& s, Rhs& b) {
   }
 }
 
+// B ← M⁻¹ B for the M whose PartialPivLU is `lu` (P M = L U, L unit lower and U both in matrixLU()), by
+// substitution a row at a time. Eigen's own solve with a matrix right-hand side takes the blocked
+// level-3 path, whose workspace fallback links malloc and free into a firmware image.
+template <class Lu, class Rhs>
+void luSolveInPlace(const Lu& lu, Rhs& b) {
+  b = lu.permutationP() * b;
+  const auto& m = lu.matrixLU();
+  const int n = int(m.rows());
+  for (int i = 1; i < n; ++i)
+    for (int k = 0; k < i; ++k) b.row(i) -= m(i, k) * b.row(k);
+  for (int i = n - 1; i >= 0; --i) {
+    for (int k = i + 1; k < n; ++k) b.row(i) -= m(i, k) * b.row(k);
+    b.row(i) /= m(i, i);
+  }
+}
+
 // ---- Covariances ----------------------------------------------------------------------------------------
 
 // P ← (P + Pᵀ)/2 in place, a triangle at a time (no temporary, no aliasing). Halved before the sum,

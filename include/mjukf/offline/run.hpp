@@ -73,8 +73,8 @@ DataSet<Model> dataSet(typename Model::Scalar startTime, typename Model::Scalar 
 namespace detail {
 
 // The parameter covariance of a filter that has one (`parameterCovariance()`): JointUkf's θ block,
-// DualUkf's parameter filter. Ukf's parameters are known and ModifiedJointUkf keeps no covariance of θ
-// (docs/offline-tools.md), so their samples have no such member.
+// DualUkf's parameter filter, ModifiedJointUkf's P_θ (NaN when it does not follow one). Ukf's
+// parameters are known (docs/offline-tools.md), so its samples have no such member.
 template <class Filter>
 inline constexpr bool hasParameterCovariance = mjukf::detail::hasParameterCovariance<Filter>;
 

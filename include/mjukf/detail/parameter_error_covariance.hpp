@@ -1,0 +1,140 @@
+#pragma once
+
+/// \file
+/// The MJUKF's covariance of θ̂ (docs/algorithms.md §5.1; not in the paper): the first-order covariance
+/// of the joint error (η, e), e = θ̂ − θ and η = x̂ − x − W e the state's error that the parameters' does not
+/// explain (W = ∂x̂/∂θ̂, parameter_sensitivity.hpp), carried through the filter's own steps: its gain
+/// K, its parameter gain G = diag(ξ) T, and the dynamics linearised from its sigma points.
+
+#include <Eigen/Core>
+#include <Eigen/LU>
+
+#include "mjukf/detail/linear_algebra.hpp"
+
+namespace mjukf::detail {
+
+template <class Scalar, int N, int M, int P>
+class ParameterErrorCovariance {
+ public:
+  using Joint = Eigen::Matrix<Scalar, N + P, N + P>;
+  using StateMatrix = Eigen::Matrix<Scalar, N, N>;
+  using ParamMatrix = Eigen::Matrix<Scalar, P, P>;
+  using MeasMatrix = Eigen::Matrix<Scalar, M, M>;
+  using StateByParam = Eigen::Matrix<Scalar, N, P>;
+  using StateByMeas = Eigen::Matrix<Scalar, N, M>;
+  using MeasByState = Eigen::Matrix<Scalar, M, N>;
+  using MeasByParam = Eigen::Matrix<Scalar, M, P>;
+  using ParamByMeas = Eigen::Matrix<Scalar, P, M>;
+  using Points = Eigen::Matrix<Scalar, N, 2 * N + 1>;
+  using ParamPoints = Eigen::Matrix<Scalar, P, 2 * N + 1>;
+
+  /// Independent errors: cov(η) = the state's P₀, cov(e) = the parameters' prior.
+  void start(const StateMatrix& stateCovariance, const ParamMatrix& parameterCovariance) {
+    joint_.setZero();
+    joint_.template topLeftCorner<N, N>() = stateCovariance;
+    joint_.template bottomRightCorner<P, P>() = parameterCovariance;
+    candidate_ = joint_;
+    effect_.setZero();
+  }
+  /// A new state estimate that does not depend on θ̂ (W = 0): cov(η) = its covariance, uncorrelated
+  /// with e, which is kept.
+  void restartState(const StateMatrix& stateCovariance) {
+    joint_.template topLeftCorner<N, N>() = stateCovariance;
+    joint_.template topRightCorner<N, P>().setZero();
+    joint_.template bottomLeftCorner<P, N>().setZero();
+    candidate_ = joint_;
+  }
+
+  /// The time update: χᵢ⁺ = Φ(χᵢ, θᵢ) from the symmetric points χ₀ = x̂, χⱼ = x̂ + γ Lⱼ, χⱼ₊ₙ = x̂ − γ Lⱼ.
+  /// Their half differences are Δⱼ = (χⱼ⁺ − χⱼ₊ₙ⁺) / 2 = A γLⱼ + B ϑⱼ, ϑⱼ = (θⱼ − θⱼ₊ₙ) / 2, so A (the
+  /// dynamics' Jacobian) follows from them once B = ∂Φ/∂θ is known. `derivative` is D = A W + B over this
+  /// interval when the sensitivities were refreshed (then A (γL − W ϑ) = Δ − D ϑ), null otherwise (B as
+  /// at the last refresh). `predictedSensitivity` is W⁻. Then η⁻ = A η + (A W + B − W⁻) e − w, e unchanged.
+  /// After open-loop propagations since the last time update, the sensitivities extrapolate W over them
+  /// from this interval's D by `extrapolation` = (open-loop time + interval) / interval; A and B are
+  /// extrapolated alike, I + x (A − I) and x B, so that W⁻ stays their image of W.
+  /// Returns false when A is not finite (the points collapsed); then the prediction is η⁻ = η − w.
+  bool predict(const Points& prior, const Points& propagated, const ParamPoints& parameterPoints,
+               const StateByParam& sensitivity, const StateByParam* derivative,
+               const StateByParam& predictedSensitivity, const StateMatrix& processNoise, Scalar extrapolation) {
+    for (int j = 0; j < N; ++j) {
+      spread_.col(j) = (prior.col(1 + j) - prior.col(1 + N + j)) * Scalar(0.5);
+      change_.col(j) = (propagated.col(1 + j) - propagated.col(1 + N + j)) * Scalar(0.5);
+      parameterSpread_.col(j) = (parameterPoints.col(1 + j) - parameterPoints.col(1 + N + j)) * Scalar(0.5);
+    }
+    if (derivative) {
+      change_.noalias() -= *derivative * parameterSpread_;
+      spread_.noalias() -= sensitivity * parameterSpread_;
+    } else {
+      change_.noalias() -= effect_ * parameterSpread_;
+    }
+    // A = change · spread⁻¹, i.e. spreadᵀ Aᵀ = changeᵀ.
+    StateMatrix transposed = change_.transpose();
+    luSolveInPlace(spread_.transpose().partialPivLu(), transposed);
+    jacobian_ = transposed.transpose();
+    const bool found = allFinite(jacobian_);
+    if (!found) jacobian_.setIdentity();
+    if (derivative && found) effect_ = *derivative - jacobian_ * sensitivity;  // B
+    // Over the open-loop time too: A ← I + x (A − I), B ← x B.
+    jacobian_ = StateMatrix::Identity() + extrapolation * (jacobian_ - StateMatrix::Identity());
+    transition_.setIdentity();
+    transition_.template topLeftCorner<N, N>() = jacobian_;
+    StateByParam drift = extrapolation * effect_ - predictedSensitivity;
+    drift.noalias() += jacobian_ * sensitivity;
+    transition_.template topRightCorner<N, P>() = drift;
+    spreadJoint_.noalias() = transition_ * joint_;
+    candidate_.noalias() = spreadJoint_ * transition_.transpose();
+    candidate_.template topLeftCorner<N, N>() += processNoise;
+    return found;
+  }
+
+  /// The measurement update: ν = −H η⁻ − ψ e + v; the filter's state moves by K ν and θ̂ by −G ν, and W
+  /// becomes `correctedSensitivity` (W⁺). Then
+  ///   e⁺ = (I + G ψ) e + G H η⁻ − G v,
+  ///   η⁺ = (I − K H − W⁺ G H) η⁻ − W⁺ G ψ e + (K + W⁺ G) v.
+  /// Columns of missing components are zero in H's rows, K and G. Returns false when the result is not
+  /// finite.
+  bool correct(const MeasByState& jacobian, const StateByMeas& gain, const ParamByMeas& parameterGain,
+               const MeasByParam& sensitivity, const StateByParam& correctedSensitivity,
+               const MeasMatrix& measurementNoise) {
+    // The error's map Z = [[I − K H − W⁺ G H, −W⁺ G ψ], [G H, I + G ψ]] and its noise V = [K + W⁺ G; −G].
+    const Eigen::Matrix<Scalar, P, N> parameterFromState = parameterGain * jacobian;  // G H
+    const ParamMatrix parameterFromParameter = parameterGain * sensitivity;           // G ψ
+    transition_.setIdentity();
+    transition_.template topLeftCorner<N, N>().noalias() -= gain * jacobian;
+    transition_.template topLeftCorner<N, N>().noalias() -= correctedSensitivity * parameterFromState;
+    transition_.template topRightCorner<N, P>().noalias() = -correctedSensitivity * parameterFromParameter;
+    transition_.template bottomLeftCorner<P, N>() = parameterFromState;
+    transition_.template bottomRightCorner<P, P>() += parameterFromParameter;
+    noiseMap_.template topRows<N>() = gain;
+    noiseMap_.template topRows<N>().noalias() += correctedSensitivity * parameterGain;
+    noiseMap_.template bottomRows<P>() = -parameterGain;
+    spreadJoint_.noalias() = transition_ * joint_;  // the committed prediction
+    corrected_.noalias() = spreadJoint_ * transition_.transpose();
+    noiseSpread_.noalias() = noiseMap_ * measurementNoise;
+    corrected_.noalias() += noiseSpread_ * noiseMap_.transpose();
+    spreadJoint_ = corrected_.transpose();  // symmetric as committed
+    candidate_ = (corrected_ + spreadJoint_) * Scalar(0.5);
+    return allFinite(candidate_);
+  }
+
+  void commit() { joint_ = candidate_; }
+
+  /// P_θ = cov(e), as committed.
+  ParamMatrix parameterCovariance() const { return joint_.template bottomRightCorner<P, P>(); }
+  /// cov((η, e)) as committed.
+  const Joint& committed() const { return joint_; }
+
+ private:
+  Joint joint_ = Joint::Zero();                 // cov((η, e)) as committed
+  Joint candidate_ = Joint::Zero();             // after the step in progress
+  StateByParam effect_ = StateByParam::Zero();  // B = ∂Φ/∂θ from the last refresh of the sensitivities
+  // Workspace.
+  StateMatrix spread_ = StateMatrix::Zero(), change_ = StateMatrix::Zero(), jacobian_ = StateMatrix::Zero();
+  Eigen::Matrix<Scalar, P, N> parameterSpread_ = Eigen::Matrix<Scalar, P, N>::Zero();
+  Joint transition_ = Joint::Zero(), spreadJoint_ = Joint::Zero(), corrected_ = Joint::Zero();
+  Eigen::Matrix<Scalar, N + P, M> noiseMap_ = Eigen::Matrix<Scalar, N + P, M>::Zero();
+  Eigen::Matrix<Scalar, N + P, M> noiseSpread_ = Eigen::Matrix<Scalar, N + P, M>::Zero();
+};
+
+}  // namespace mjukf::detail
