@@ -131,6 +131,13 @@ def main():
     w("on an idle machine it equals wall-clock time; on the shared machine wall-clock time also counts the")
     w("time other processes held the core). The JSON has both.")
     w("")
+    w("How the cost grows with the size of the model (a chain of masses, n = 2 … 32, every filter beside its")
+    w("floor, the cost exponent), the kernels chosen by size with the measurements behind their thresholds,")
+    scaling_page = "docs/performance-scaling.md"  # linked relative to docs/
+    name = os.path.basename(scaling_page)
+    w(f"and the compile time and memory of a filter: [{name}]({name}),")
+    w("written by `scripts/scaling.sh`.")
+    w("")
     w(f"Run: {ctx.get('date', '?')} at commit `{commit}` (plus the working tree), {ctx.get('num_cpus', '?')} CPUs at "
       f"{ctx.get('mhz_per_cpu', '?')} MHz, load average before the plain run {load_avg('plain')}"
       + (f", before the native run {load_avg('native')}" if native else "") + ".")

@@ -1,6 +1,7 @@
 // No per-step call allocates: every filter on both plants and on the 2019 systems, every kind of call,
 // including refused ones; the dual filter in both orderings; the automatic MJUKF; every filter over a
-// discrete-time model and over a model without input; and reset().
+// discrete-time model and over a model without input; reset(); and filters large enough (L = 32, 36)
+// for the general forms of the kernels chosen by size (detail/linear_algebra.hpp).
 // Two independent witnesses: Eigen's own runtime check (EIGEN_RUNTIME_NO_MALLOC makes any Eigen heap
 // allocation assert while it is forbidden) and a global operator new that counts every allocation.
 
@@ -10,12 +11,15 @@
 #include <atomic>
 #include <cstdlib>
 #include <limits>
+#include <memory>
 #include <new>
 #include <type_traits>
 
 #include <gtest/gtest.h>
 
+#include "chain_model.hpp"  // bench/: the scaling benchmark's chain of masses
 #include "mjukf/dual_ukf.hpp"
+#include "mjukf/integrators/rk4.hpp"
 #include "mjukf/model.hpp"
 #include "mjukf/models/flexible_joint.hpp"
 #include "no_input_model.hpp"
@@ -312,6 +316,35 @@ TEST(NoAllocation, CallsWithoutInput) {
   expectNoAllocationWithoutInput<mjukf::JointUkf<Pendulum, Rk4>>();
   expectNoAllocationWithoutInput<mjukf::ModifiedJointUkf<Pendulum, Rk4>>();
   expectNoAllocationWithoutInput<mjukf::DualUkf<Pendulum, Rk4>>();
+}
+
+// The kernels' general forms (matrix products, rank-k update, blocked LLT; detail/linear_algebra.hpp)
+// allocate nothing either: a JUKF at L = 36 and a float UKF at L = 32 on the chain of masses, on the heap
+// (about 190 KB and 60 KB).
+template <class Filter>
+void expectNoAllocationAtLargeSize(const typename Filter::Param& theta, const typename Filter::Settings& settings) {
+  using Model = typename Filter::Model;
+  using Scalar = typename Model::Scalar;
+  auto filter = std::make_unique<Filter>(Model(), Model::State::Constant(Scalar(0.1)), theta, settings);
+  const typename Model::Meas y = Model::Meas::Constant(Scalar(0.1));
+  Status status[4];
+  const long count = allocationsDuring([&] {
+    status[0] = filter->timeUpdate(Scalar(0), Scalar(1e-3));
+    status[1] = filter->measurementUpdate(y);
+    status[2] = filter->timeUpdate(Scalar(1e-3), Scalar(1e-3));
+    status[3] = filter->measurementUpdate(y);
+  });
+  EXPECT_EQ(count, 0) << "heap allocations in per-step calls at large L";
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(status[i], Status::Ok) << "call " << i;
+}
+
+TEST(NoAllocation, GeneralKernelsAtLargeSize) {
+  using ChainD = mjukf::bench::Chain<double, 32, 4>;
+  using ChainF = mjukf::bench::Chain<float, 32, 4>;
+  using JointD = mjukf::JointUkf<ChainD, mjukf::Rk4<double>>;
+  using UkfF = mjukf::Ukf<ChainF, mjukf::Rk4<float>>;
+  expectNoAllocationAtLargeSize<JointD>(ChainD::trueParameters(), mjukf::bench::ChainExperiment<ChainD>::jointUkf());
+  expectNoAllocationAtLargeSize<UkfF>(ChainF::trueParameters(), mjukf::bench::ChainExperiment<ChainF>::ukf());
 }
 
 // The witnesses work: an allocation inside the window is seen by both.

@@ -351,7 +351,7 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
     Meas mean;
     weightedMean(stateMeasured_, est.sigmaPoints().meanWeights(), mean);
     stateMeasured_.colwise() -= mean;
-    weightedOuterSum(stateMeasured_, stateMeasured_, est.sigmaPoints().covarianceWeights(), observationNoise_);
+    weightedCovariance(stateMeasured_, est.sigmaPoints().covarianceWeights(), observationNoise_);
     observationNoise_ += engine.settings().measurementNoise;
     return Status::Ok;
   }

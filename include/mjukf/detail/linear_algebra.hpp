@@ -14,9 +14,48 @@
 #include <type_traits>
 #include <utility>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
 
 namespace mjukf::detail {
+
+// ---- Kernels chosen by size ----------------------------------------------------------------------------
+//
+// The weighted outer sums, P − U Uᵀ and the Cholesky factor below are written out coefficient by
+// coefficient (fully unrolled for the factor), which is fastest at the sizes of the paper's plants but
+// grows as L³ and stops using the vector units well: at L = 36 the outer sums were half of a step. From
+// a size on, each takes Eigen's general form instead: a matrix product (GEMM; for a covariance, from a
+// larger size, one triangle of it), a symmetric rank-k update of one triangle, the blocked LLT. The
+// sizes are where the general form measured faster and stayed so (`mjukf_kernel_bench`, each kernel in
+// each form at L = 2 … 16, 20, 24, 28, 32, 36; docs/performance-scaling.md says which are a size or two
+// off the CPU-time border), per scalar type, with one exception: the double Cholesky, whose unrolled
+// form stays up to 10 % faster up to L = 32 but whose code and compile time grow as L³, is blocked from
+// 20. The choice is made at compile time on
+// the fixed size L (for a point set, of its 2L + 1 or 2L points). MJUKF_GENERAL_KERNELS_FROM overrides
+// them all (scripts/scaling.sh builds the small-size kernels at every size with it).
+struct GeneralKernelSizes {
+  int covarianceProduct;   // Σ Wᵢ dᵢ dᵢᵀ by GEMM, both triangles
+  int covarianceTriangle;  // … by a product of the lower triangle only, mirrored
+  int crossProduct;        // Σ Wᵢ aᵢ bᵢᵀ by GEMM
+  int subtractRankUpdate;  // P − U Uᵀ by a rank-k update of the lower triangle, mirrored
+  int cholesky;            // Eigen's blocked LLT
+};
+#ifdef MJUKF_GENERAL_KERNELS_FROM
+template <class Scalar>
+inline constexpr GeneralKernelSizes generalKernelsFrom{MJUKF_GENERAL_KERNELS_FROM, MJUKF_GENERAL_KERNELS_FROM,
+                                                       MJUKF_GENERAL_KERNELS_FROM, MJUKF_GENERAL_KERNELS_FROM,
+                                                       MJUKF_GENERAL_KERNELS_FROM};
+#else
+template <class Scalar>
+inline constexpr GeneralKernelSizes generalKernelsFrom =
+    std::is_same_v<Scalar, float> ? GeneralKernelSizes{9, 28, 14, 24, 24} : GeneralKernelSizes{9, 20, 11, 20, 20};
+#endif
+
+// True when a kernel of fixed size N is at least `from` (a member of generalKernelsFrom).
+template <int N>
+constexpr bool atLeast(int from) {
+  return N != Eigen::Dynamic && N >= from;
+}
 
 // ---- Finiteness ---------------------------------------------------------------------------------------
 
@@ -69,7 +108,7 @@ bool forEachIndex(F&& f) {
 // must also factor in any other correct Cholesky (Eigen's LLT), which the fuzz target checks.
 // `s` must not alias `a`.
 template <class Scalar, int N>
-bool choleskyLower(const Eigen::Matrix<Scalar, N, N>& a, Eigen::Matrix<Scalar, N, N>& s) {
+bool choleskyLowerUnrolled(const Eigen::Matrix<Scalar, N, N>& a, Eigen::Matrix<Scalar, N, N>& s) {
   // Computed as A = L D Lᵀ (L unit lower triangular), then S = L D^½. The pivots dⱼ are the squares of
   // the diagonal of S, and each column waits only for a division by the pivot before it, not for a
   // square root as well; the square roots are independent and come last. At these sizes the chain of
@@ -105,6 +144,33 @@ bool choleskyLower(const Eigen::Matrix<Scalar, N, N>& a, Eigen::Matrix<Scalar, N
     return true;
   });
   return true;
+}
+
+// The same factor and the same refusals by Eigen's blocked in-place LLT (the routine Eigen::LLT runs,
+// without its L1 norm), for large N. It stops at the first pivot ≤ 0 or NaN; the margin is checked on
+// the factor afterwards: dⱼ = s_jj² is the pivot (up to one rounding), and a NaN or Inf anywhere in the
+// lower triangle of A reaches a later pivot through the column it enters, so it fails here too.
+template <class Scalar, int N>
+bool choleskyLowerBlocked(const Eigen::Matrix<Scalar, N, N>& a, Eigen::Matrix<Scalar, N, N>& s) {
+  constexpr Scalar margin = Scalar(N) * std::numeric_limits<Scalar>::epsilon();
+  s.template triangularView<Eigen::Lower>() = a;
+  if (Eigen::internal::llt_inplace<Scalar, Eigen::Lower>::blocked(s) >= 0) return false;
+  for (int j = 0; j < N; ++j) {
+    const Scalar pivot = s(j, j) * s(j, j);
+    if (!(pivot > margin * a(j, j)) || !(pivot <= std::numeric_limits<Scalar>::max())) return false;  // NaN fails too
+  }
+  s.template triangularView<Eigen::StrictlyUpper>().setZero();
+  return true;
+}
+
+// S with A = S Sᵀ (choleskyLowerUnrolled's contract): the unrolled form for small N, the blocked one
+// from generalKernelsFrom<Scalar>.cholesky on.
+template <class Scalar, int N>
+bool choleskyLower(const Eigen::Matrix<Scalar, N, N>& a, Eigen::Matrix<Scalar, N, N>& s) {
+  if constexpr (atLeast<N>(generalKernelsFrom<Scalar>.cholesky))
+    return choleskyLowerBlocked(a, s);
+  else
+    return choleskyLowerUnrolled(a, s);
 }
 
 // B ← S⁻¹ B and B ← S⁻ᵀ B for a lower-triangular S (a factor from choleskyLower), by substitution a
@@ -164,13 +230,76 @@ void weightedMean(const Eigen::MatrixBase<Points>& points, const Eigen::MatrixBa
 }
 
 // out = Σ Wcᵢ aᵢ bᵢᵀ of the deviations aᵢ, bᵢ (columns): the covariance when a = b, otherwise the
-// cross-covariance. A coefficient-wise product (lazyProduct): left to choose, Eigen takes its general
-// GEMM kernel once rows + columns + depth exceed 20 (JUKF on the robot: 6 + 6 + 13), and packing the
-// operands then costs more than the whole rest of the step.
+// cross-covariance. Small point sets: a coefficient-wise product (lazyProduct): left to choose, Eigen
+// takes its general GEMM kernel once rows + columns + depth exceed 20 (JUKF on the robot: 6 + 6 + 13),
+// and packing the operands then costs more than the whole rest of the step. Large ones (L = Count / 2
+// from crossProduct on): that general product, which the packing then pays for.
+template <class DevA, class DevB, class Weights, class Out>
+void weightedOuterSumCoefficientwise(const Eigen::MatrixBase<DevA>& a, const Eigen::MatrixBase<DevB>& b,
+                                     const Eigen::MatrixBase<Weights>& weights, Eigen::MatrixBase<Out>& out) {
+  out.noalias() = (a * weights.asDiagonal()).lazyProduct(b.transpose());
+}
+template <class DevA, class DevB, class Weights, class Out>
+void weightedOuterSumProduct(const Eigen::MatrixBase<DevA>& a, const Eigen::MatrixBase<DevB>& b,
+                             const Eigen::MatrixBase<Weights>& weights, Eigen::MatrixBase<Out>& out) {
+  out.noalias() = (a * weights.asDiagonal()) * b.transpose();
+}
 template <class DevA, class DevB, class Weights, class Out>
 void weightedOuterSum(const Eigen::MatrixBase<DevA>& a, const Eigen::MatrixBase<DevB>& b,
                       const Eigen::MatrixBase<Weights>& weights, Eigen::MatrixBase<Out>& out) {
-  out.noalias() = (a * weights.asDiagonal()).lazyProduct(b.transpose());
+  if constexpr (atLeast<DevA::ColsAtCompileTime / 2>(generalKernelsFrom<typename Out::Scalar>.crossProduct))
+    weightedOuterSumProduct(a, b, weights, out);
+  else
+    weightedOuterSumCoefficientwise(a, b, weights, out);
+}
+
+// The strictly upper triangle of a square m ← its lower triangle, transposed.
+template <class Matrix>
+void mirrorLowerTriangle(Eigen::MatrixBase<Matrix>& m) {
+  for (int c = 1; c < int(m.cols()); ++c)
+    for (int r = 0; r < c; ++r) m(r, c) = m(c, r);
+}
+
+// out = Σ Wcᵢ dᵢ dᵢᵀ, a covariance: weightedOuterSum(d, d, …)'s coefficient-wise form for small point
+// sets (bit for bit what it was), GEMM from covarianceProduct, and from covarianceTriangle a product of
+// the lower triangle only, mirrored: half the arithmetic, and exactly symmetric.
+template <class Dev, class Weights, class Out>
+void weightedCovarianceTriangle(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase<Weights>& weights,
+                                Eigen::MatrixBase<Out>& out) {
+  out.template triangularView<Eigen::Lower>() = (d * weights.asDiagonal()) * d.transpose();
+  mirrorLowerTriangle(out);
+}
+template <class Dev, class Weights, class Out>
+void weightedCovariance(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase<Weights>& weights,
+                        Eigen::MatrixBase<Out>& out) {
+  constexpr int L = Dev::ColsAtCompileTime / 2;
+  if constexpr (atLeast<L>(generalKernelsFrom<typename Out::Scalar>.covarianceTriangle))
+    weightedCovarianceTriangle(d, weights, out);
+  else if constexpr (atLeast<L>(generalKernelsFrom<typename Out::Scalar>.covarianceProduct))
+    weightedOuterSumProduct(d, d, weights, out);
+  else
+    weightedOuterSumCoefficientwise(d, d, weights, out);
+}
+
+// P ← P − U Uᵀ (U = P_xy S⁻ᵀ, the measurement update's K P_yy Kᵀ). Small L: coefficient-wise, both
+// triangles (each the same sum of the same products: exactly symmetric). Large L: a symmetric rank-k
+// update of the lower triangle, mirrored.
+template <class Cov, class Cols>
+void subtractOuterCoefficientwise(Eigen::MatrixBase<Cov>& p, const Eigen::MatrixBase<Cols>& u) {
+  p.noalias() -= u.lazyProduct(u.transpose());
+}
+template <class Cov, class Cols>
+void subtractOuterRankUpdate(Eigen::MatrixBase<Cov>& p, const Eigen::MatrixBase<Cols>& u) {
+  using Scalar = typename Cov::Scalar;
+  p.template selfadjointView<Eigen::Lower>().rankUpdate(u, Scalar(-1));
+  mirrorLowerTriangle(p);
+}
+template <class Cov, class Cols>
+void subtractOuter(Eigen::MatrixBase<Cov>& p, const Eigen::MatrixBase<Cols>& u) {
+  if constexpr (atLeast<Cov::RowsAtCompileTime>(generalKernelsFrom<typename Cov::Scalar>.subtractRankUpdate))
+    subtractOuterRankUpdate(p, u);
+  else
+    subtractOuterCoefficientwise(p, u);
 }
 
 // C ← U = C S⁻ᵀ for a lower-triangular S, i.e. U Sᵀ = C solved a column at a time (the columns of U are

@@ -383,7 +383,7 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
       }
       sr().candidate = SquareRootPart_::Candidate::CovarianceOnly;
     }
-    weightedOuterSum(deviations_, deviations_, sigmaPoints_.covarianceWeights(), candidateCovariance_);
+    weightedCovariance(deviations_, sigmaPoints_.covarianceWeights(), candidateCovariance_);
     candidateCovariance_ += processNoise;
   }
 
@@ -425,7 +425,7 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
     deviations_.noalias() = points.colwise() - prior.mean;
     const auto& weights = sigmaPoints_.covarianceWeights();
     if constexpr (!SquareRoot) {
-      weightedOuterSum(measurementDeviations_, measurementDeviations_, weights, d.innovationCovariance);
+      weightedCovariance(measurementDeviations_, weights, d.innovationCovariance);
       d.innovationCovariance += measurementNoise;  // P_yy
     }
     weightedOuterSum(deviations_, measurementDeviations_, weights, gainFactor_);  // P_xy
@@ -473,7 +473,7 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
       sr().candidate = SquareRootPart_::Candidate::CovarianceOnly;
     }
     candidateCovariance_ = prior.covariance;
-    candidateCovariance_.noalias() -= gainFactor_.lazyProduct(gainFactor_.transpose());  // P = P⁻ − K P_yy Kᵀ
+    subtractOuter(candidateCovariance_, gainFactor_);  // P = P⁻ − K P_yy Kᵀ
     return Status::Ok;
   }
 
@@ -622,8 +622,7 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
       if (allFinite(d.innovationCovariance)) return true;
     }
     // The full form's P_yy (ΔY's missing rows are zero already).
-    weightedOuterSum(measurementDeviations_, measurementDeviations_, sigmaPoints_.covarianceWeights(),
-                     d.innovationCovariance);
+    weightedCovariance(measurementDeviations_, sigmaPoints_.covarianceWeights(), d.innovationCovariance);
     d.innovationCovariance += measurementNoise;
     if (present)
       for (int j = 0; j < M; ++j) {
