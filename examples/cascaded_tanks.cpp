@@ -1,6 +1,7 @@
 // mjukf_cascaded_tanks: a real plant identified from its recorded data, the Cascaded Tanks benchmark
 // (tests/data/cascaded_tanks/README.md), with JUKF, MJUKF (automatic) and the dual UKF under one rule
-// for their settings; the benchmark's test, the terms of the model and the rule's sensitivity.
+// for their settings; the benchmark's test, the terms of the model, the rule's sensitivity and the rule
+// on the records swapped.
 // docs/real-data.md, "Cascaded tanks". Run without arguments for the usage.
 
 #include <cstdio>
@@ -41,6 +42,9 @@ void printUsage(std::ostream& out) {
       << "      (DIR/terms.txt).\n"
       << "  sensitivity --data FILE [--out-dir DIR]\n"
       << "      The JUKF's test RMS with each setting of the rule halved and doubled (DIR/sensitivity.txt).\n"
+      << "  crosscheck --data FILE [--out-dir DIR]\n"
+      << "      The rule with the two records' roles swapped: identified on the test record, scored on the\n"
+      << "      estimation record, which nobody looked at while the rule was made (DIR/crosscheck.txt).\n"
       << "\n"
       << "Output files are written under temporary names and put in place only when the whole run has\n"
       << "succeeded. exit codes: 0 ok; 1 the run failed (a file could not be written, gnuplot failed);\n"
@@ -73,45 +77,82 @@ void writeReport(OutputFiles& outputs, const std::string& dir, const std::string
   writeText(outputs.add((std::filesystem::path(dir) / name).string()), text);
 }
 
+// Each filter identified under the rule, and the output-error fit, scored on the test record: the
+// table's rows (model, test RMS, estimation RMS, best pass, refused steps, parameters).
+struct Row {
+  const char* name;
+  Identified identified;
+  TestResult test;
+};
+struct Identifications {
+  Rule rule;
+  std::vector<Row> rows;
+  OutputErrorFit reference;
+  TestResult referenceTest;
+};
+
+Identifications identifyAll(const Model& model, const Benchmark& b) {
+  Identifications all;
+  all.rule = makeRule(b);
+  all.rows = {{"JUKF", identifyJoint(model, b, all.rule), {}},
+              {"MJUKF (automatic)", identifyModified(model, b, all.rule), {}},
+              {"dual UKF", identifyDual(model, b, all.rule), {}}};
+  for (Row& row : all.rows) row.test = testSimulation(model, row.identified.theta, b);
+  all.reference = fitOutputError(model, b, structures().back().free);
+  all.referenceTest = testSimulation(model, all.reference.theta, b);
+  return all;
+}
+
+std::string ruleText(const Rule& rule) {
+  return "The rule: R = " + fixed(rule.measurementNoise, 4) +
+         " V^2 (100 sigma^2, sigma^2 = " + fixed(rule.sensorVariance, 6) +
+         " from the data), Q = " + fixed(rule.levelNoise, 6) + " V^2 per sample, " + std::to_string(rule.passes) +
+         " passes (docs/real-data.md).\n\n";
+}
+
+std::string resultsTable(const Model& model, const Identifications& all) {
+  std::string text =
+      "| model | test RMS | estimation RMS | best pass | refused steps | parameters |\n|---|---|---|---|---|---|\n";
+  for (const Row& row : all.rows)
+    text += std::string("| ") + row.name + " | " + fixed(row.test.rms) + " | " + fixed(row.identified.estimationRms) +
+            " | " + std::to_string(row.identified.bestPass + 1) + " | " + std::to_string(row.identified.refused) +
+            " | " + describe(model, row.identified.theta) + " |\n";
+  text += "| output-error fit of the same model (no filter) | " + fixed(all.referenceTest.rms) + " | " +
+          fixed(all.reference.estimationRms) + " | | | " + describe(model, all.reference.theta) + " |\n";
+  return text;
+}
+
+// Whether the passes settle: each pass's free-run RMS on the record identified on.
+std::string passesText(const Identifications& all) {
+  std::string text = "Estimation RMS after each pass:\n\n";
+  for (const Row& row : all.rows) {
+    text += std::string("- ") + row.name + ":";
+    for (double error : row.identified.passErrors) text += " " + fixed(error);
+    text += "\n";
+  }
+  return text;
+}
+
 int identifyCommand(const Arguments& args) {
   args.requiredText("--out-dir");
   const Benchmark b = loadBenchmark(args.requiredText("--data"));
   const std::string dir = directory(args);
   const Model model;
-  const Rule rule = makeRule(b);
-  struct Row {
-    const char* name;
-    Identified identified;
-    TestResult test;
-  };
-  std::vector<Row> rows{{"JUKF", identifyJoint(model, b, rule), {}},
-                        {"MJUKF (automatic)", identifyModified(model, b, rule), {}},
-                        {"dual UKF", identifyDual(model, b, rule), {}}};
-  for (Row& row : rows) row.test = testSimulation(model, row.identified.theta, b);
-  const OutputErrorFit reference = fitOutputError(model, b, structures().back().free);
-  const TestResult referenceTest = testSimulation(model, reference.theta, b);
+  const Identifications all = identifyAll(model, b);
+  const std::vector<Row>& rows = all.rows;
 
   std::string text = "# Cascaded Tanks: test RMS error (V)\n\n";
   text +=
       "Identified on the estimation set; on the test set a free run from uVal, its initial state from "
-      "yVal[0..4]; RMS over yVal[5..]. The rule: R = " +
-      fixed(rule.measurementNoise, 4) +
-      " V^2 (100 sigma^2, "
-      "sigma^2 = " +
-      fixed(rule.sensorVariance, 6) + " from the data), Q = " + fixed(rule.levelNoise, 6) + " V^2 per sample, " +
-      std::to_string(rule.passes) + " passes (docs/real-data.md).\n\n";
-  text += "| model | test RMS | estimation RMS | best pass | refused steps | parameters |\n|---|---|---|---|---|---|\n";
-  for (const Row& row : rows)
-    text += std::string("| ") + row.name + " | " + fixed(row.test.rms) + " | " + fixed(row.identified.estimationRms) +
-            " | " + std::to_string(row.identified.bestPass + 1) + " | " + std::to_string(row.identified.refused) +
-            " | " + describe(model, row.identified.theta) + " |\n";
-  text += "| output-error fit of the same model (no filter) | " + fixed(referenceTest.rms) + " | " +
-          fixed(reference.estimationRms) + " | | | " + describe(model, reference.theta) + " |\n";
+      "yVal[0..4]; RMS over yVal[5..]. " +
+      ruleText(all.rule);
+  text += resultsTable(model, all);
   text +=
       "| published: best linear approximation | 0.757 | | | | |\n"
       "| published: Volterra | 0.54 | | | | |\n"
       "| published: PNLSS | 0.45 | | | | |\n"
       "| published: NLSS2 | 0.343 | | | | |\n\n";
+  text += passesText(all) + "\n";
   // Where the JUKF stopped, against the optimum: a local output-error fit started from its θ̂.
   const OutputErrorFit refined = fitOutputError(model, b, structures().back().free, 1, &rows[0].identified.theta);
   text += "A local output-error fit started from the JUKF's parameters: estimation RMS " +
@@ -161,6 +202,28 @@ int termsCommand(const Arguments& args) {
   }
   OutputFiles outputs;
   writeReport(outputs, dir, "terms.txt", text);
+  outputs.commit();
+  return kExitOk;
+}
+
+// The rule on a record it was not made on: the estimation and test records swapped, so the filters
+// identify the plant on the benchmark's test record and are scored on its estimation record.
+int crosscheckCommand(const Arguments& args) {
+  Benchmark b = loadBenchmark(args.requiredText("--data"));
+  std::swap(b.uEst, b.uVal);
+  std::swap(b.yEst, b.yVal);
+  const std::string dir = directory(args);
+  const Model model;
+  const Identifications all = identifyAll(model, b);
+  std::string text =
+      "# Cascaded Tanks, the records swapped: identified on the test record, scored on the estimation record (V)\n\n"
+      "The rule made afresh from the test record's noise; on the estimation record a free run from uEst, its "
+      "initial state from yEst[0..4]; RMS over yEst[5..] (the columns headed test and estimation below are "
+      "the records' swapped roles: test = the benchmark's estimation record). " +
+      ruleText(all.rule) + resultsTable(model, all) + "\n" + passesText(all) +
+      "\nJUKF crosscheck RMS: " + fixed(all.rows[0].test.rms, 4) + " V\n";
+  OutputFiles outputs;
+  writeReport(outputs, dir, "crosscheck.txt", text);
   outputs.commit();
   return kExitOk;
 }
@@ -223,6 +286,7 @@ int main(int argc, char** argv) {
     if (words[0] == "identify") return identifyCommand(Arguments(flags, {"--data", "--out-dir"}));
     if (words[0] == "terms") return termsCommand(Arguments(flags, {"--data", "--out-dir"}));
     if (words[0] == "sensitivity") return sensitivityCommand(Arguments(flags, {"--data", "--out-dir"}));
+    if (words[0] == "crosscheck") return crosscheckCommand(Arguments(flags, {"--data", "--out-dir"}));
     throw UsageError("unknown subcommand '" + words[0] + "'");
   } catch (const UsageError& e) {
     std::cerr << kProgram << ": " << e.what() << "\n\n";

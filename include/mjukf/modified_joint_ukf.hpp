@@ -270,8 +270,7 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
     if constexpr (Automatic) {
       if (followsSensitivities_) {
         const Scalar memory = s.adaptiveScaling ? s.convergenceTime : std::numeric_limits<Scalar>::infinity();
-        const Scalar updates =
-            s.adaptiveScaling ? s.minimumMemoryUpdates : std::numeric_limits<Scalar>::infinity();
+        const Scalar updates = s.adaptiveScaling ? s.minimumMemoryUpdates : std::numeric_limits<Scalar>::infinity();
         const auto measure = [&c](const State& x, const Param& theta) {
           return measureModel(c.model, x, c.input, theta);
         };

@@ -1,6 +1,7 @@
 // mjukf_cascaded_tanks, run as a user runs it on the shipped benchmark data: `identify` end to end
 // (the files it writes, the test simulation's CSV, and the JUKF's test RMS it prints, recomputed from
-// that CSV as the benchmark defines it), and a missing or malformed data file refused with exit 2.
+// that CSV as the benchmark defines it), `crosscheck` (the records swapped), and a missing or malformed
+// data file refused with exit 2.
 
 #include <cmath>
 #include <fstream>
@@ -62,6 +63,23 @@ TEST(CascadedTanks, IdentifyWritesTheTestSimulationAndItsScore) {
   ASSERT_NE(at, std::string::npos) << r.output;
   const double printed = std::stod(r.output.substr(at + tag.size()));
   EXPECT_NEAR(rms, printed, 5e-5) << r.output;  // printed with 4 decimals
+  EXPECT_LT(rms, 0.757);
+}
+
+// The rule on the records swapped: its table, and the JUKF's RMS on the record it did not see, written
+// whole and better than the best linear approximation's 0.757 V.
+TEST(CascadedTanks, CrosscheckScoresTheRecordItDidNotIdentifyOn) {
+  const std::string dir = scratch("cascaded_tanks_crosscheck");
+  const Result r = run(kProgram + " crosscheck --data " + shellQuote(kData) + " --out-dir " + shellQuote(dir));
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  const std::string report = readText(dir + "/crosscheck.txt");
+  for (const char* row : {"| JUKF |", "| MJUKF (automatic) |", "| dual UKF |", "| output-error fit", "- JUKF:"})
+    EXPECT_NE(report.find(row), std::string::npos) << row;
+  const std::string tag = "JUKF crosscheck RMS: ";
+  const std::size_t at = report.find(tag);
+  ASSERT_NE(at, std::string::npos) << report;
+  const double rms = std::stod(report.substr(at + tag.size()));
+  EXPECT_GT(rms, 0.0);
   EXPECT_LT(rms, 0.757);
 }
 
