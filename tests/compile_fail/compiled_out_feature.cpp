@@ -49,13 +49,17 @@ int main() {
   settings.transformation(0, 0) = 1;
   settings.scaling = -0.1;
   settings.health.enabled = false;
+  settings.followParameterCovariance = false;  // P_θ goes with the automatic modes
   auto mjukf = Mjukf::create(Decay(), Decay::State(1), Decay::Param(0.5), settings);
   Ukf::Settings ukfSettings;
   ukfSettings.initialCovariance(0, 0) = 1;
   ukfSettings.measurementNoise(0, 0) = 0.01;
   ukfSettings.health.enabled = false;
   auto ukf = Ukf::create(Decay(), Decay::State(1), Decay::Param(0.5), ukfSettings);
-  if (!mjukf || !ukf) return 1;
+  if (!mjukf || !ukf) {
+    std::fprintf(stderr, "refused: %s %s\n", mjukf ? "" : mjukf.error().setting, ukf ? "" : ukf.error().setting);
+    return 1;
+  }
   mjukf->timeUpdate(0.0, 0.1);
   mjukf->measurementUpdate(Decay::Meas(0.9));
   ukf->timeUpdate(0.0, 0.1);
