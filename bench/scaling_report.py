@@ -243,6 +243,10 @@ def main():
                 w(f"| {m.group(1).replace('_', ' ')} | {m.group(2)} | {float(m.group(3)):.1f} | "
                   f"{float(m.group(4)):.1f} | {int(m.group(5)) / 1024:,.0f} |")
         w("")
+    # Measurements of where the compile time goes, written by hand (bench/compile_time_notes.md).
+    notes = os.path.join(os.path.dirname(os.path.abspath(__file__)), "compile_time_notes.md")
+    if os.path.exists(notes):
+        w("".join(line for line in open(notes, encoding="utf-8") if not line.startswith("<!--")))
 
     with open(output, "w") as f:
         f.write("\n".join(out).rstrip() + "\n")
