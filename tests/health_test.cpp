@@ -24,6 +24,7 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // of unit variance), the parameter (if moving) drifting by `drift` per update with σ = 1.
 Monitor feed(double scale, double rho, long updates, double drift = 0, unsigned seed = 1) {
   mjukf::HealthSettings<double> settings;
+  settings.flagSmallInnovations = true;  // every test an alarm
   Monitor monitor(settings);
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> normal;
@@ -61,7 +62,7 @@ TEST(HealthMonitor, TheBoundsAreTheChiSquareQuantilesOfTheBlock) {
 TEST(HealthMonitor, EachInnovationTestRaisesItsAlarm) {
   // Twice the size P_yy says: NIS ≈ 4 per degree of freedom against a bound of about 1.9.
   EXPECT_EQ(feed(2.0, 0.0, 50).health(), Health::InnovationsTooLarge);
-  // A third of it: NIS ≈ 0.11 against a lower bound of about 0.4.
+  // A third of it: NIS ≈ 0.11 against a lower bound of about 0.4 (with flagSmallInnovations).
   EXPECT_EQ(feed(1.0 / 3, 0.0, 50).health(), Health::InnovationsTooSmall);
   // Correlated with coefficient 0.8: √50 · 0.8 ≈ 5.7 against a bound of 5.0 (the NIS stays near 1).
   const Monitor correlated = feed(1.0, 0.8, 200);
@@ -96,28 +97,78 @@ TEST(HealthMonitor, AnUnboundedSigmaIsARunaway) {
   EXPECT_EQ(monitor.health(), Health::ParameterRunaway);
 }
 
-TEST(HealthMonitor, TheVerdictFollowsTheLastBlockAndTheFirstAlarmStays) {
-  mjukf::HealthSettings<double> settings;
-  Monitor monitor(settings);
-  const Eigen::Matrix2d covariance = Eigen::Matrix2d::Identity();
-  const Eigen::Vector2d large(10, -10);
-  for (int k = 0; k < 50; ++k)
-    monitor.observeUpdate(large, covariance, large.squaredNorm(), nullptr, Param1(0), Param1(-1), Param1(-kInf),
-                          Param1(kInf));
-  EXPECT_EQ(monitor.health(), Health::InnovationsTooLarge);
-  EXPECT_EQ(monitor.statistics().alarmAtUpdate, 50);
-  std::mt19937_64 rng(2);
+// One block of 50 updates of two components with unit P_yy: innovations of size `scale` (1: white ones
+// of the right size, 10: an alarm).
+void feedBlock(Monitor& monitor, double scale, std::mt19937_64& rng) {
   std::normal_distribution<double> normal;
+  const Eigen::Matrix2d covariance = Eigen::Matrix2d::Identity();
   for (int k = 0; k < 50; ++k) {
-    const Eigen::Vector2d e(normal(rng), normal(rng));
+    const Eigen::Vector2d e = scale * Eigen::Vector2d(normal(rng), normal(rng));
     monitor.observeUpdate(e, covariance, e.squaredNorm(), nullptr, Param1(0), Param1(-1), Param1(-kInf), Param1(kInf));
   }
-  EXPECT_EQ(monitor.health(), Health::Ok);  // the block after is healthy, and so is the filter now ...
+}
+
+TEST(HealthMonitor, AnAlarmStandsUntilMostRememberedBlocksAreCleanAndTheFirstAlarmStays) {
+  mjukf::HealthSettings<double> settings;
+  Monitor monitor(settings);
+  std::mt19937_64 rng(2);
+  feedBlock(monitor, 10, rng);
+  EXPECT_EQ(monitor.health(), Health::InnovationsTooLarge);
+  EXPECT_EQ(monitor.statistics().alarmAtUpdate, 50);
+  feedBlock(monitor, 1, rng);
+  EXPECT_EQ(monitor.statistics().lastBlock, Health::Ok);      // the block after is healthy ...
+  EXPECT_EQ(monitor.health(), Health::InnovationsTooLarge);  // ... but one of two blocks alarmed
+  feedBlock(monitor, 1, rng);
+  EXPECT_EQ(monitor.health(), Health::Ok);  // one of three: the filter is healthy now ...
   EXPECT_EQ(monitor.statistics().firstAlarm, Health::InnovationsTooLarge);  // ... which once was not
   EXPECT_EQ(monitor.statistics().alarmedBlocks, 1);
+  EXPECT_EQ(monitor.statistics().blocksInMemory, 3);
+  EXPECT_EQ(monitor.statistics().alarmedInMemory, 1);
   monitor.clearAlarm();
   EXPECT_EQ(monitor.statistics().firstAlarm, Health::Ok);
   EXPECT_EQ(monitor.statistics().alarmAtUpdate, 0);
+}
+
+TEST(HealthMonitor, AnAlarmIsRaisedAtOnceAndStandsWhileHalfTheRememberedBlocksRaisedOne) {
+  mjukf::HealthSettings<double> settings;  // verdictMemory 10
+  Monitor monitor(settings);
+  std::mt19937_64 rng(3);
+  for (int b = 0; b < 10; ++b) feedBlock(monitor, 1, rng);
+  EXPECT_EQ(monitor.health(), Health::Ok);
+  // One alarmed block after ten clean ones raises its alarm at once; four clean blocks withdraw it.
+  feedBlock(monitor, 10, rng);
+  EXPECT_EQ(monitor.health(), Health::InnovationsTooLarge);
+  for (int b = 0; b < 4; ++b) feedBlock(monitor, 1, rng);
+  EXPECT_EQ(monitor.health(), Health::Ok);
+  // A filter that went wrong for five blocks and then read quiet: the alarm stands for as long as five of
+  // the last ten blocks alarmed, and no longer.
+  for (int b = 0; b < 10; ++b) feedBlock(monitor, 1, rng);
+  for (int b = 0; b < 5; ++b) feedBlock(monitor, 10, rng);
+  for (int b = 0; b < 5; ++b) {
+    feedBlock(monitor, 1, rng);
+    EXPECT_EQ(monitor.health(), Health::InnovationsTooLarge) << "clean block " << b + 1;
+  }
+  EXPECT_EQ(monitor.statistics().alarmedInMemory, 5);
+  feedBlock(monitor, 1, rng);
+  EXPECT_EQ(monitor.health(), Health::Ok);
+  // A new pass forgets the remembered blocks; the first alarm and the counts stay.
+  for (int b = 0; b < 3; ++b) feedBlock(monitor, 10, rng);
+  monitor.restartBlock();
+  EXPECT_EQ(monitor.health(), Health::Ok);
+  EXPECT_EQ(monitor.statistics().blocksInMemory, 0);
+  EXPECT_EQ(monitor.statistics().alarmedBlocks, 9);
+  EXPECT_EQ(monitor.statistics().firstAlarm, Health::InnovationsTooLarge);
+}
+
+TEST(HealthMonitor, AMemoryOfOneBlockIsTheLastBlocksVerdict) {
+  mjukf::HealthSettings<double> settings;
+  settings.verdictMemory = 1;
+  Monitor monitor(settings);
+  std::mt19937_64 rng(5);
+  for (int b = 0; b < 5; ++b) feedBlock(monitor, 10, rng);
+  EXPECT_EQ(monitor.health(), Health::InnovationsTooLarge);
+  feedBlock(monitor, 1, rng);
+  EXPECT_EQ(monitor.health(), Health::Ok);
 }
 
 TEST(HealthMonitor, RefusalsInARowRaiseTheirAlarmAndATakenCallEndsTheStreak) {
@@ -188,8 +239,17 @@ TEST(FilterHealth, AnRFarTooSmallOrTooLargeIsFlaggedInTheFirstBlock) {
   const auto small = runOnRandomWalk<mjukf::Ukf<RandomWalk>>(0.0, 50, 0.01, [](auto&) {});
   EXPECT_EQ(small.health(), Health::InnovationsTooLarge);
   EXPECT_EQ(small.healthStatistics().alarmAtUpdate, 50);
+  // R a hundred times too large: innovations far smaller than P_yy, counted by default and an alarm
+  // when asked for. The gain is then so small that the estimate lags the walk, and the whiteness test,
+  // which runs when the NIS test raises nothing, sees its innovations correlated.
   const auto large = runOnRandomWalk<mjukf::Ukf<RandomWalk>>(0.0, 50, 100.0, [](auto&) {});
-  EXPECT_EQ(large.health(), Health::InnovationsTooSmall);
+  EXPECT_EQ(large.health(), Health::InnovationsCorrelated);
+  EXPECT_EQ(large.healthStatistics().smallInnovationBlocks, 1);
+  EXPECT_LT(large.healthStatistics().normalisedNis, large.healthStatistics().nisLowerBound);
+  const auto flagged =
+      runOnRandomWalk<mjukf::Ukf<RandomWalk>>(0.0, 50, 100.0, [](auto& s) { s.health.flagSmallInnovations = true; });
+  EXPECT_EQ(flagged.health(), Health::InnovationsTooSmall);
+  EXPECT_EQ(flagged.healthStatistics().smallInnovationBlocks, 1);
 }
 
 TEST(FilterHealth, AWrongFixedParameterIsFlagged) {
@@ -308,6 +368,9 @@ TEST(FilterHealth, InvalidSettingsAreNamed) {
                "health.falseAlarmProbability");
   EXPECT_STREQ(errorOf([](auto& h) { h.runawaySigmas = 0; }).setting, "health.runawaySigmas");
   EXPECT_STREQ(errorOf([](auto& h) { h.refusalStreak = 0; }).setting, "health.refusalStreak");
+  EXPECT_STREQ(errorOf([](auto& h) { h.verdictMemory = 0; }).setting, "health.verdictMemory");
+  EXPECT_STREQ(errorOf([](auto& h) { h.verdictMemory = 17; }).setting, "health.verdictMemory");
+  EXPECT_FALSE(errorOf([](auto& h) { h.verdictMemory = 16; }));
   EXPECT_FALSE(errorOf([](auto&) {}));
 }
 

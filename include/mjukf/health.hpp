@@ -25,7 +25,10 @@ enum class Health : unsigned char {
   /// covariance collapsed, Q or R is far too small, or the estimate has left the truth.
   InnovationsTooLarge,
   /// The innovations were smaller than P_yy says (summed NIS below its χ² bound): the covariance is far
-  /// larger than the errors, because it is exploding or Q or R is far too large.
+  /// larger than the errors, because it is exploding or Q or R is far too large. An alarm only with
+  /// `HealthSettings::flagSmallInnovations`: otherwise the block is counted
+  /// (`HealthStatistics::smallInnovationBlocks`) and the estimate, less certain than it could be but not
+  /// wrong by what its covariance says, is not called untrustworthy.
   InnovationsTooSmall,
   /// Successive innovations were correlated (the lag-one autocorrelation of a normalised component
   /// beyond its bound): the model does not explain the data, a wrong structure, a wrong fixed value, or
@@ -77,6 +80,17 @@ struct HealthSettings {
   Scalar runawaySigmas = Scalar(10);
   /// Refused calls in a row that raise `RepeatedRefusals`, ≥ 1.
   int refusalStreak = 10;
+  /// Whether a block whose NIS sum is below its lower χ² bound raises `InnovationsTooSmall`. false (the
+  /// default): it is counted in `smallInnovationBlocks` and raises nothing, since a covariance larger
+  /// than the errors overstates the uncertainty instead of hiding it. true: to be told that Q or R is
+  /// far too large (docs/troubleshooting.md).
+  bool flagSmallInnovations = false;
+  /// The blocks the verdict remembers, 1 to 16. A block that fails a test raises its alarm at once, and
+  /// the alarm stands while at least half of the last `verdictMemory` complete blocks of the pass (all
+  /// of them, while there are fewer) raised one: a filter that diverged does not read Ok again after
+  /// one quiet block, and an alarm early in a run that then settles does not stand for the rest of it.
+  /// 1: the last block's verdict alone.
+  int verdictMemory = 10;
 };
 
 /// The numbers behind `health()` (a filter's `healthStatistics()`).
@@ -85,9 +99,12 @@ struct HealthStatistics {
   /// The first alarm since construction, `reset` or `clearHealth()`: it stays, so a run that went
   /// wrong and recovered still says so at its end (`health()` is the state now).
   Health firstAlarm = Health::Ok;
-  /// The verdict of the last complete block alone (Ok when it raised no alarm): what `health()` returns
-  /// unless a streak of refusals is under way.
+  /// The verdict of the last complete block alone (Ok when it raised no alarm).
   Health lastBlock = Health::Ok;
+  /// The latest alarm of a block among the last `verdictMemory` (Ok when none raised one): what
+  /// `health()` returns when the last block raised it or while at least half of them alarmed, unless a
+  /// streak of refusals is under way.
+  Health latestAlarm = Health::Ok;
   /// The committed measurement update at which `firstAlarm` was raised (counting from 1); 0 if none.
   long alarmAtUpdate = 0;
   /// Committed measurement updates since construction or `reset`.
@@ -96,6 +113,13 @@ struct HealthStatistics {
   long blocks = 0;
   /// Complete blocks that raised an alarm.
   long alarmedBlocks = 0;
+  /// Complete blocks whose NIS sum was below its lower bound (alarmed or not, `flagSmallInnovations`).
+  long smallInnovationBlocks = 0;
+  /// The complete blocks the verdict remembers: the last `verdictMemory` of this pass, or all of them
+  /// while there are fewer.
+  int blocksInMemory = 0;
+  /// Of those, the ones that raised an alarm.
+  int alarmedInMemory = 0;
   /// The last complete block's summed NIS over its degrees of freedom (1 on a consistent filter).
   Scalar normalisedNis = 0;
   /// The lower bound `normalisedNis` was tested against, on the same scale.
@@ -125,6 +149,8 @@ SettingsError validateHealth(const char* owner, const HealthSettings<Scalar>& he
   if (SettingsError e = requireFinite(owner, "health.runawaySigmas", health.runawaySigmas)) return e;
   if (!(health.runawaySigmas > 0)) return invalid(owner, "health.runawaySigmas", "must be positive");
   if (health.refusalStreak < 1) return invalid(owner, "health.refusalStreak", "must be >= 1");
+  if (health.verdictMemory < 1 || health.verdictMemory > 16)
+    return invalid(owner, "health.verdictMemory", "must be in [1, 16]");
   return {};
 }
 
@@ -156,17 +182,20 @@ class HealthMonitor {
   }
 
   const HealthStatistics<Scalar>& statistics() const { return stats_; }
-  // Now: refusals in a row at the streak's length, else the last complete block's verdict.
+  // Now: refusals in a row at the streak's length; else the latest alarm if the last block raised it or
+  // while at least half of the remembered blocks raised one; else Ok.
   Health health() const {
     if (settings_.enabled &&
         (measurementRefusals_ >= settings_.refusalStreak || propagationRefusals_ >= settings_.refusalStreak))
       return Health::RepeatedRefusals;
-    return stats_.lastBlock;
+    const bool standing = stats_.alarmedInMemory > 0 && 2 * stats_.alarmedInMemory >= stats_.blocksInMemory;
+    return stats_.lastBlock != Health::Ok || standing ? stats_.latestAlarm : Health::Ok;
   }
 
   // Everything back to the start (reset()).
   void clear() {
     stats_ = HealthStatistics<Scalar>();
+    forgetVerdicts();
     measurementRefusals_ = propagationRefusals_ = 0;
     startBlock();
     blockStarted_ = false;
@@ -176,10 +205,12 @@ class HealthMonitor {
     stats_.firstAlarm = Health::Ok;
     stats_.alarmAtUpdate = 0;
   }
-  // A new pass: the block under way is dropped, the alarms kept.
+  // A new pass: the block under way and the remembered verdicts are dropped (a pass restarted from a
+  // healthy estimate starts Ok), the first alarm and the counts kept.
   void restartBlock() {
     startBlock();
     blockStarted_ = false;
+    forgetVerdicts();
   }
 
   // Every public call's outcome: counts refusals in a row, of measurement updates and of propagations
@@ -256,8 +287,10 @@ class HealthMonitor {
       stats_.nisLowerBound = lower / Scalar(dof_);
       if (!(nisSum_ <= upper))
         verdict = Health::InnovationsTooLarge;  // NaN fails too
-      else if (nisSum_ < lower)
-        verdict = Health::InnovationsTooSmall;
+      else if (nisSum_ < lower) {
+        ++stats_.smallInnovationBlocks;
+        if (settings_.flagSmallInnovations) verdict = Health::InnovationsTooSmall;
+      }
     }
     // Whiteness: √N r₁ per component, r₁ = Σ eₖ eₖ₋₁ / Σ eₖ².
     Scalar worst = 0;
@@ -293,10 +326,28 @@ class HealthMonitor {
       }
     }
     stats_.lastBlock = verdict;
+    remember(verdict);
     if (verdict != Health::Ok) {
       ++stats_.alarmedBlocks;
       raise(verdict);
     }
+  }
+
+  // The last verdictMemory blocks, a bit each (1: alarmed), newest in bit 0.
+  void remember(Health verdict) {
+    const unsigned memoryMask = (1u << settings_.verdictMemory) - 1u;
+    recentAlarms_ = ((recentAlarms_ << 1) | (verdict != Health::Ok ? 1u : 0u)) & memoryMask;
+    if (verdict != Health::Ok) stats_.latestAlarm = verdict;
+    int alarmed = 0;
+    for (unsigned bits = recentAlarms_; bits != 0; bits &= bits - 1) ++alarmed;
+    stats_.alarmedInMemory = alarmed;
+    if (stats_.blocksInMemory < settings_.verdictMemory) ++stats_.blocksInMemory;
+    if (alarmed == 0) stats_.latestAlarm = Health::Ok;
+  }
+  void forgetVerdicts() {
+    recentAlarms_ = 0;
+    stats_.blocksInMemory = stats_.alarmedInMemory = 0;
+    stats_.latestAlarm = Health::Ok;
   }
 
   void raise(Health alarm) {
@@ -327,6 +378,7 @@ class HealthMonitor {
   Mask previousPresent_ = Mask::Constant(false);
   bool blockStarted_ = false;
   int measurementRefusals_ = 0, propagationRefusals_ = 0;
+  unsigned recentAlarms_ = 0;
   Param blockStartParameters_ = Param::Zero(), blockStartSigma_ = Param::Constant(Scalar(-1));
 };
 

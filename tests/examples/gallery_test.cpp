@@ -2,6 +2,7 @@
 // (every filter the baseline of docs/studies.md runs, two seeds), the simulation's absolute noise
 // through the measurement with the input of its row, and the flags that do not apply to the gallery.
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iterator>
@@ -72,8 +73,9 @@ TEST(Gallery, ShortStudyOfEachPlant) {
     const auto rows = readCsv(dir + "/" + plant.slug + "_study.csv");
     ASSERT_EQ(rows.size(), 1u + 2 * 3) << plant.slug;
     // seed, filter, scenario; 2 RMSEs; 5; 2 finals; the final NEES of θ̂; the health at the end; the
-    // updates from a forced fault to the first alarm
-    ASSERT_EQ(rows[0].size(), 3u + 2 + 5 + 2 + 1 + 1 + 1) << plant.slug;
+    // updates from a forced fault to the first alarm; the first alarm, the blocks and the alarmed ones;
+    // the final relative error
+    ASSERT_EQ(rows[0].size(), 3u + 2 + 5 + 2 + 1 + 1 + 1 + 3 + 1) << plant.slug;
     EXPECT_EQ(rows[1][0] + "," + rows[1][1], "1,jukf") << plant.slug;
     EXPECT_EQ(rows[1][5], "0") << plant.slug << ": JUKF diverged on seed 1";
     EXPECT_EQ(rows[1][6], "ok") << plant.slug;
@@ -139,8 +141,16 @@ TEST(Gallery, AForcedFaultIsFlaggedInTheFirstBlock) {
   EXPECT_NE(row.find("fault to first alarm, diverged runs: median 49 [49, 49] updates"), std::string::npos) << row;
   const auto rows = readCsv(dir + "/dc_motor_study.csv");
   ASSERT_EQ(rows.size(), 4u);
-  EXPECT_EQ(rows[0].back(), "updates_to_alarm");
-  for (std::size_t k = 1; k < rows.size(); ++k) EXPECT_EQ(rows[k].back(), "49") << k;
+  const auto column = [&](const std::string& name) {
+    return std::size_t(std::find(rows[0].begin(), rows[0].end(), name) - rows[0].begin());
+  };
+  ASSERT_LT(column("updates_to_alarm"), rows[0].size());
+  ASSERT_LT(column("alarmed_blocks"), rows[0].size());
+  for (std::size_t k = 1; k < rows.size(); ++k) {
+    EXPECT_EQ(rows[k][column("updates_to_alarm")], "49") << k;
+    EXPECT_EQ(rows[k][column("first_alarm")], rows[k][column("health")]) << k;
+    EXPECT_NE(rows[k][column("alarmed_blocks")], "0") << k;
+  }
 }
 
 }  // namespace

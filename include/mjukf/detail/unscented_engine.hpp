@@ -955,8 +955,10 @@ class UnscentedEngine {
   /// `input(time())`.
   Scalar time() const { return time_; }
 
-  /// The health monitor's verdict now (health.hpp): `Health::Ok` when the last complete block of
-  /// measurement updates passed its tests and no streak of refusals is under way, otherwise the alarm.
+  /// The health monitor's verdict now (health.hpp): the alarm of the last complete block of measurement
+  /// updates if it failed a test, an alarm that stands while at least half of the blocks the monitor
+  /// remembers (`health.verdictMemory`) raised one, or a streak of refusals under way; otherwise
+  /// `Health::Ok`.
   /// The first alarm since construction, `reset` or `clearHealth()` stays in
   /// `healthStatistics().firstAlarm`, with the update that raised it.
   /// Not available in a filter compiled `Without<feature::HealthMonitor>`.
