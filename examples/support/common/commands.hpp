@@ -194,6 +194,11 @@ void printHealth(const EstimateRun<Model>& run) {
         "parameter motion %.3g sigma\n",
         double(h.normalisedNis), double(h.nisLowerBound), double(h.nisUpperBound), double(h.autocorrelationScore),
         double(h.autocorrelationBound), double(h.parameterMotionSigmas));
+  if (h.smallInnovationBlocks > 0)
+    std::printf(
+        "health: in %ld of %ld blocks the innovations were smaller than their covariance (Q or R larger than the "
+        "errors; an alarm only with health.flagSmallInnovations)\n",
+        h.smallInnovationBlocks, h.blocks);
 }
 
 }  // namespace detail

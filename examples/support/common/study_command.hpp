@@ -212,6 +212,8 @@ struct StudyResult {
   long alarmedBlocks = 0;
   /// maxᵢ |θ̂ᵢ − θᵢ| / |θᵢ| at the last row (NaN when the run stopped early).
   double finalRelativeError = std::nan("");
+  /// The largest |ρᵢⱼ| (i ≠ j) of the filter's final covariance of θ̂; NaN for a filter that reports none.
+  double parameterCorrelation = std::nan("");
   Status status = Status::Ok;
   /// Measurement updates from the forced fault to the first alarm (health.hpp's `alarmAtUpdate`): 0 for
   /// an alarm at the fault's own update, negative for one raised before the fault; unset without an
@@ -424,6 +426,12 @@ int studyCommand(const std::vector<std::string>& words) {
             const typename Model::Param error = run.parameters.back() - data.parameterTruth.back();
             const auto factor = run.finalParameterCovariance->llt();
             if (factor.info() == Eigen::Success) result.nees = error.dot(factor.solve(error));
+            const auto& c = *run.finalParameterCovariance;
+            double largest = 0;
+            for (int i = 0; i < p; ++i)
+              for (int j = 0; j < i; ++j)
+                largest = std::max(largest, double(std::abs(c(i, j)) / std::sqrt(c(i, i) * c(j, j))));
+            result.parameterCorrelation = largest;
           }
           result.status = run.outcome.status;
           result.stoppedAtRow = run.outcome.row;
@@ -449,7 +457,7 @@ int studyCommand(const std::vector<std::string>& words) {
   for (const auto& q : Plant::parameters) header.push_back(std::string("final_") + q.name);
   header.insert(header.end(),
                 {"nees", "health", "updates_to_alarm", "first_alarm", "blocks", "alarmed_blocks",
-                 "final_relative_error"});
+                 "final_relative_error", "parameter_correlation"});
   const int divergedColumn = 4 + p;
   {
     CsvWriter csv(*csvFile, header);
@@ -464,7 +472,7 @@ int studyCommand(const std::vector<std::string>& words) {
         csv << result.nees << std::string(toString(result.health))
             << (result.updatesToAlarm ? double(*result.updatesToAlarm) : std::nan(""))
             << std::string(toString(result.firstAlarm)) << double(result.blocks) << double(result.alarmedBlocks)
-            << result.finalRelativeError;
+            << result.finalRelativeError << result.parameterCorrelation;
         csv.endRow();
       }
     csv.close();
