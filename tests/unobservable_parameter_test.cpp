@@ -6,8 +6,8 @@
 #include <cmath>
 #include <random>
 #include <tuple>
-#include <utility>
 #include <type_traits>
+#include <utility>
 
 #include <gtest/gtest.h>
 

@@ -455,9 +455,8 @@ int studyCommand(const std::vector<std::string>& words) {
   for (const auto& q : Plant::parameters) header.push_back(detail::rmseColumn(q));
   header.insert(header.end(), {"diverged", "status", "stopped_at_row", "repairs", "rejected"});
   for (const auto& q : Plant::parameters) header.push_back(std::string("final_") + q.name);
-  header.insert(header.end(),
-                {"nees", "health", "updates_to_alarm", "first_alarm", "blocks", "alarmed_blocks",
-                 "final_relative_error", "parameter_correlation"});
+  header.insert(header.end(), {"nees", "health", "updates_to_alarm", "first_alarm", "blocks", "alarmed_blocks",
+                               "final_relative_error", "parameter_correlation"});
   const int divergedColumn = 4 + p;
   {
     CsvWriter csv(*csvFile, header);
@@ -492,8 +491,9 @@ int studyCommand(const std::vector<std::string>& words) {
   say("  an alarm of the last block, or one that stands while half of the last blocks raised one; docs/robustness.md,");
   say("  \"The health monitor\"); unflagged: runs that diverged with every step taken, no alarm,");
   say("  and the truth outside the 99.9 % region of the filter's own covariance of the final θ̂ (none: outside);");
-  say(format("  alarm/accurate: of the runs whose every final θ̂ is within %g %% of the truth, those with an alarm at the end",
-             100 * kAccurateBound));
+  say(format(
+      "  alarm/accurate: of the runs whose every final θ̂ is within %g %% of the truth, those with an alarm at the end",
+      100 * kAccurateBound));
   Plotter plotter;
   for (std::size_t s = 0; s < scenarios.size(); ++s) {
     say("");
