@@ -135,11 +135,13 @@ TEST(HealthMonitor, AnAlarmIsRaisedAtOnceAndStandsWhileHalfTheRememberedBlocksRa
   std::mt19937_64 rng(3);
   for (int b = 0; b < 10; ++b) feedBlock(monitor, 1, rng);
   EXPECT_EQ(monitor.health(), Health::Ok);
-  // One alarmed block after ten clean ones raises its alarm at once; four clean blocks withdraw it.
+  // One alarmed block after ten clean ones raises its alarm at once; the next clean block withdraws it
+  // (one of ten).
   feedBlock(monitor, 10, rng);
   EXPECT_EQ(monitor.health(), Health::InnovationsTooLarge);
-  for (int b = 0; b < 4; ++b) feedBlock(monitor, 1, rng);
+  feedBlock(monitor, 1, rng);
   EXPECT_EQ(monitor.health(), Health::Ok);
+  EXPECT_EQ(monitor.statistics().alarmedInMemory, 1);
   // A filter that went wrong for five blocks and then read quiet: the alarm stands for as long as five of
   // the last ten blocks alarmed, and no longer.
   for (int b = 0; b < 10; ++b) feedBlock(monitor, 1, rng);
@@ -158,6 +160,54 @@ TEST(HealthMonitor, AnAlarmIsRaisedAtOnceAndStandsWhileHalfTheRememberedBlocksRa
   EXPECT_EQ(monitor.statistics().blocksInMemory, 0);
   EXPECT_EQ(monitor.statistics().alarmedBlocks, 9);
   EXPECT_EQ(monitor.statistics().firstAlarm, Health::InnovationsTooLarge);
+}
+
+TEST(HealthMonitor, AStandingAlarmIsNamedByTheLatestAlarmedBlock) {
+  // Large innovations, then correlated ones (a coefficient of 0.95: √50 · 0.95 ≈ 6.7 against 5.0, the NIS
+  // near 1), then a clean block: two of three alarmed, so the alarm stands, named by the later one.
+  mjukf::HealthSettings<double> settings;
+  Monitor monitor(settings);
+  std::mt19937_64 rng(6);
+  feedBlock(monitor, 10, rng);
+  std::normal_distribution<double> normal;
+  const Eigen::Matrix2d covariance = Eigen::Matrix2d::Identity();
+  Eigen::Vector2d e(normal(rng), normal(rng));
+  for (int k = 0; k < 50; ++k) {
+    e = 0.95 * e + std::sqrt(1 - 0.95 * 0.95) * Eigen::Vector2d(normal(rng), normal(rng));
+    monitor.observeUpdate(e, covariance, e.squaredNorm(), nullptr, Param1(0), Param1(-1), Param1(-kInf), Param1(kInf));
+  }
+  ASSERT_EQ(monitor.statistics().lastBlock, Health::InnovationsCorrelated);
+  feedBlock(monitor, 1, rng);
+  EXPECT_EQ(monitor.health(), Health::InnovationsCorrelated);
+  EXPECT_EQ(monitor.statistics().latestAlarm, Health::InnovationsCorrelated);
+  EXPECT_EQ(monitor.statistics().firstAlarm, Health::InnovationsTooLarge);
+}
+
+TEST(HealthMonitor, ClearForgetsTheRememberedBlocks) {
+  mjukf::HealthSettings<double> settings;
+  Monitor monitor(settings);
+  std::mt19937_64 rng(7);
+  for (int b = 0; b < 5; ++b) feedBlock(monitor, 10, rng);
+  monitor.clear();
+  feedBlock(monitor, 1, rng);
+  EXPECT_EQ(monitor.health(), Health::Ok);
+  EXPECT_EQ(monitor.statistics().blocksInMemory, 1);
+  EXPECT_EQ(monitor.statistics().alarmedInMemory, 0);
+}
+
+TEST(HealthMonitor, TheLongestMemoryHoldsSixteenBlocks) {
+  mjukf::HealthSettings<double> settings;
+  settings.verdictMemory = 16;
+  Monitor monitor(settings);
+  std::mt19937_64 rng(8);
+  for (int b = 0; b < 16; ++b) feedBlock(monitor, 1, rng);
+  for (int b = 0; b < 8; ++b) feedBlock(monitor, 10, rng);
+  for (int b = 0; b < 8; ++b) feedBlock(monitor, 1, rng);  // eight of the last sixteen: it stands
+  EXPECT_EQ(monitor.statistics().blocksInMemory, 16);
+  EXPECT_EQ(monitor.statistics().alarmedInMemory, 8);
+  EXPECT_EQ(monitor.health(), Health::InnovationsTooLarge);
+  feedBlock(monitor, 1, rng);  // seven of sixteen
+  EXPECT_EQ(monitor.health(), Health::Ok);
 }
 
 TEST(HealthMonitor, AMemoryOfOneBlockIsTheLastBlocksVerdict) {

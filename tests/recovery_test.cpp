@@ -80,6 +80,31 @@ TEST(Recovery, ASensorFaultTakesTheParametersBackToTheLastHealthyBlock) {
   EXPECT_FALSE(recovering.recoveredInLastCall());
 }
 
+TEST(Recovery, BlocksWhoseAlarmDoesNotTriggerARecoveryStillMakeCopies) {
+  // R ten times the sensor's and the small-innovation alarm asked for: every block raises
+  // InnovationsTooSmall (normalised NIS about 0.17 against a lower bound of about 0.4), which does not
+  // trigger a recovery by default. A sensor fault like the test above's (30 too much: S is ten times
+  // larger) must still go back to the copy of update 500, not to the filter as it was built.
+  const auto tooLargeR = [] {
+    mjukf::JointUkf<RandomWalk>::Settings s;
+    s.initialCovariance.setIdentity();
+    s.processNoise(0, 0) = kQ;
+    s.measurementNoise(0, 0) = 10 * kR;
+    s.health.flagSmallInnovations = true;
+    return mjukf::JointUkf<RandomWalk>(RandomWalk(), RandomWalk::State(0), RandomWalk::Param(0), s);
+  };
+  auto plain = tooLargeR();
+  run(plain, 500);
+  EXPECT_EQ(plain.health(), Health::InnovationsTooSmall);
+  EXPECT_EQ(plain.healthStatistics().alarmedBlocks, 10);
+  mjukf::Recovering<mjukf::JointUkf<RandomWalk>> recovering(tooLargeR());
+  run(recovering, 550, 30.0, 510, 530);
+  ASSERT_EQ(recovering.recoveries(), 1);
+  EXPECT_EQ(recovering.lastRecovery().alarm, Health::InnovationsTooLarge);
+  EXPECT_EQ(recovering.lastRecovery().restoredTime, 500.0);
+  EXPECT_EQ(recovering.filter().parameters(), plain.parameters());
+}
+
 TEST(Recovery, AModelNoRecoveryCanFixUsesUpItsRecoveriesAndKeepsItsAlarm) {
   // A UKF that takes the drift as 0 on a plant drifting by 0.3: every block alarms.
   mjukf::Ukf<RandomWalk>::Settings s;

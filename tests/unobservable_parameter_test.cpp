@@ -109,7 +109,8 @@ void expectCoveredOrFlagged(const Outcome& out, int r, const char* filter) {
 }
 
 TEST(UnobservableParameter, ItStaysWhereThePriorLeftItUnderThePriorsSigma) {
-  // What honest means here: no data on θ₂, so θ̂₂ and its σ stay as they started, and θ₁ converges.
+  // What honest means here: no data on θ₂, so θ̂₂ and its σ stay as they started (the prior, which holds
+  // the truth 2.9 σ₀ away), and θ₁ converges.
   using Plant = TwoInputTank<false>;
   for (unsigned seed = 1; seed <= 5; ++seed) {
     SCOPED_TRACE(testing::Message() << "seed " << seed);
@@ -119,29 +120,48 @@ TEST(UnobservableParameter, ItStaysWhereThePriorLeftItUnderThePriorsSigma) {
       EXPECT_EQ(out.health, Health::Ok) << name;
       EXPECT_NEAR(out.estimate(1), kGuess(1), 1e-9) << name;
       EXPECT_NEAR(std::sqrt(out.covariance(1, 1)), priorSigma, 1e-6 * priorSigma) << name;
-      EXPECT_NEAR(out.estimate(0), kTruth(0), 4 * std::sqrt(out.covariance(0, 0))) << name;
-      EXPECT_LT(std::sqrt(out.covariance(0, 0)), 0.01) << name << ": θ₁ is observable";
-      expectCoveredOrFlagged(out, 1, name);
+      // θ₁: a least-squares fit of y⁺ − 0.9 y on u₁ over 2000 updates has σ ≈ 0.0025 (noise variance about
+      // Q + 1.81 R, E[u₁²] = 1.5). The filters, which know that the level is smooth, do better (about a
+      // tenth of it): their σ must be below twice that, and the error within 3.29 of their σ.
+      EXPECT_LT(std::sqrt(out.covariance(0, 0)), 2 * 0.0025) << name;
+      EXPECT_LE(std::abs(out.estimate(0) - kTruth(0)), 3.29 * std::sqrt(out.covariance(0, 0))) << name;
     }
   }
 }
 
 TEST(UnobservableParameter, JointAndModifiedJointCoverAPairOnlyTheProductOfWhichIsObservable) {
-  // Only θ₁ θ₂ is observable. JUKF and the automatic MJUKF end somewhere on the ridge θ₁ θ₂ = 5 with
-  // standard deviations that cover the truth (1.7 and 2.3 σ for JUKF on seed 1; MJUKF 0.3 σ). The dual UKF
-  // does not: it ends at (1.37, 3.66) with σ (0.024, 0.064), 15 and 21 σ from the truth, its NIS
-  // about 1 and health() Ok, a confident error no test of the innovations can see, since the data are fit
-  // (docs/robustness.md, "What it cannot see"). It is left out here for that reason.
+  // Only c = θ₁ θ₂ is observable, as θ₁ above: both filters must get it within 8 σ of the least-squares
+  // fit (0.02; their curvature bias was at most 0.004 on these seeds), and end somewhere on the ridge
+  // θ₁ θ₂ = 5 with standard deviations that cover the truth (JUKF
+  // 1.7 and 2.3 σ on seed 1, the MJUKF 0.3 σ). JUKF's sigma points carry the mean of the product,
+  // θ̂₁ θ̂₂ + P₁₂, which is what it fits (θ̂₁ θ̂₂ itself is 5.23 on seed 1); the MJUKF's points each carry
+  // their own θ, whose mean it fits.
   using Plant = TwoInputTank<true>;
+  constexpr double kProductTolerance = 8 * 0.0025;
   for (unsigned seed = 1; seed <= 5; ++seed) {
     SCOPED_TRACE(testing::Message() << "seed " << seed);
-    for (const auto& [out, name] :
-         {std::pair{jointUkf<Plant>(seed), "JUKF"}, std::pair{automaticMjukf<Plant>(seed), "MJUKF"}}) {
-      EXPECT_NEAR(out.estimate(0) * out.estimate(1), kTruth(0) * kTruth(1), 0.3) << name << ": the product";
+    const Outcome joint = jointUkf<Plant>(seed);
+    EXPECT_NEAR(joint.estimate(0) * joint.estimate(1) + joint.covariance(0, 1), kTruth.prod(), kProductTolerance);
+    const Outcome modified = automaticMjukf<Plant>(seed);
+    EXPECT_NEAR(modified.estimate.prod(), kTruth.prod(), kProductTolerance);
+    for (const auto& [out, name] : {std::pair{joint, "JUKF"}, std::pair{modified, "MJUKF"}}) {
       expectCoveredOrFlagged(out, 0, name);
       expectCoveredOrFlagged(out, 1, name);
     }
   }
+}
+
+TEST(UnobservableParameter, TheDualIsConfidentlyWrongOnThePairAsDocumented) {
+  // The limitation docs/robustness.md ("What it cannot see") records, pinned so that the page changes
+  // with the filter: the dual's P^θ shrinks along the ridge too, and it ends far off under a small σ,
+  // the output fit (the product right), health() Ok.
+  using Plant = TwoInputTank<true>;
+  const Outcome out = dualUkf<Plant>(1);
+  EXPECT_EQ(out.health, Health::Ok);
+  EXPECT_NEAR(out.estimate.prod(), kTruth.prod(), 8 * 0.0025);
+  const double offBy = std::abs(out.estimate(0) - kTruth(0)) / std::sqrt(out.covariance(0, 0));
+  EXPECT_GT(offBy, 10) << "θ₁ is now within " << offBy << " σ: update docs/robustness.md";
+  EXPECT_LT(out.covariance(0, 1) / std::sqrt(out.covariance(0, 0) * out.covariance(1, 1)), -0.9999);
 }
 
 }  // namespace

@@ -56,8 +56,9 @@ struct RecoveryRecord {
 
 /// `Filter` with the recovery policy: every per-step call goes to the filter, and after each one,
 ///
-/// - a block of the health monitor that ended healthy makes the filter's present state the one to go
-///   back to (a copy of the whole filter: fixed size, no allocation);
+/// - a block of the health monitor that ended without an alarm that triggers a recovery (below) makes
+///   the filter's present state the one to go back to (a copy of the whole filter: fixed size, no
+///   allocation);
 /// - an alarm (any but `InnovationsTooSmall` unless `onInnovationsTooSmall`, and `RepeatedRefusals`
 ///   as soon as it is raised) sends the filter back to that copy's parameters, and all it knew of them,
 ///   with the present state estimate under the copy's state covariance times `covarianceInflation`, at
@@ -142,7 +143,10 @@ class Recovering {
       if (recoveries_ < settings_.maxRecoveries) recover(health);
       return;
     }
-    if (blockEnded && health == Health::Ok) healthy_ = filter_;
+    // The block raised no alarm that triggers a recovery (one that does not, InnovationsTooSmall by
+    // default, standing or not, does not stop the copies), and no streak of refusals is under way.
+    if (blockEnded && !triggers(filter_.healthStatistics().lastBlock) && health != Health::RepeatedRefusals)
+      healthy_ = filter_;
   }
 
   // Back to the last healthy filter, but at the present time and state: its parameters (and all it

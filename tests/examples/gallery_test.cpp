@@ -74,8 +74,8 @@ TEST(Gallery, ShortStudyOfEachPlant) {
     ASSERT_EQ(rows.size(), 1u + 2 * 3) << plant.slug;
     // seed, filter, scenario; 2 RMSEs; 5; 2 finals; the final NEES of θ̂; the health at the end; the
     // updates from a forced fault to the first alarm; the first alarm, the blocks and the alarmed ones;
-    // the final relative error and the largest correlation of the final covariance of θ̂
-    ASSERT_EQ(rows[0].size(), 3u + 2 + 5 + 2 + 1 + 1 + 1 + 3 + 2) << plant.slug;
+    // the final relative error, the largest correlation of the final covariance of θ̂ and its 2 σ
+    ASSERT_EQ(rows[0].size(), 3u + 2 + 5 + 2 + 1 + 1 + 1 + 3 + 2 + 2) << plant.slug;
     EXPECT_EQ(rows[1][0] + "," + rows[1][1], "1,jukf") << plant.slug;
     EXPECT_EQ(rows[1][5], "0") << plant.slug << ": JUKF diverged on seed 1";
     EXPECT_EQ(rows[1][6], "ok") << plant.slug;

@@ -196,6 +196,13 @@ std::vector<StudyScenario<typename Plant::Param>> studyScenarios() {
   return scenarios;
 }
 
+template <int N>
+std::array<double, N> filledWithNan() {
+  std::array<double, N> values;
+  values.fill(std::nan(""));
+  return values;
+}
+
 /// What the study keeps of one filter's run.
 template <int ParamDim>
 struct StudyResult {
@@ -214,6 +221,8 @@ struct StudyResult {
   double finalRelativeError = std::nan("");
   /// The largest |ρᵢⱼ| (i ≠ j) of the filter's final covariance of θ̂; NaN for a filter that reports none.
   double parameterCorrelation = std::nan("");
+  /// The standard deviations of the final θ̂ from that covariance; NaN for a filter that reports none.
+  std::array<double, ParamDim> finalSigma = filledWithNan<ParamDim>();
   Status status = Status::Ok;
   /// Measurement updates from the forced fault to the first alarm (health.hpp's `alarmAtUpdate`): 0 for
   /// an alarm at the fault's own update, negative for one raised before the fault; unset without an
@@ -427,11 +436,14 @@ int studyCommand(const std::vector<std::string>& words) {
             const auto factor = run.finalParameterCovariance->llt();
             if (factor.info() == Eigen::Success) result.nees = error.dot(factor.solve(error));
             const auto& c = *run.finalParameterCovariance;
-            double largest = 0;
-            for (int i = 0; i < p; ++i)
-              for (int j = 0; j < i; ++j)
-                largest = std::max(largest, double(std::abs(c(i, j)) / std::sqrt(c(i, i) * c(j, j))));
-            result.parameterCorrelation = largest;
+            if (p >= 2 && c.allFinite()) {  // the MJUKF that does not follow its P_θ reports NaN
+              double largest = 0;
+              for (int i = 0; i < p; ++i)
+                for (int j = 0; j < i; ++j)
+                  largest = std::max(largest, double(std::abs(c(i, j)) / std::sqrt(c(i, i) * c(j, j))));
+              result.parameterCorrelation = largest;
+            }
+            for (int i = 0; i < p; ++i) result.finalSigma[std::size_t(i)] = std::sqrt(double(c(i, i)));
           }
           result.status = run.outcome.status;
           result.stoppedAtRow = run.outcome.row;
@@ -457,6 +469,7 @@ int studyCommand(const std::vector<std::string>& words) {
   for (const auto& q : Plant::parameters) header.push_back(std::string("final_") + q.name);
   header.insert(header.end(), {"nees", "health", "updates_to_alarm", "first_alarm", "blocks", "alarmed_blocks",
                                "final_relative_error", "parameter_correlation"});
+  for (const auto& q : Plant::parameters) header.push_back(std::string("sigma_") + q.name);
   const int divergedColumn = 4 + p;
   {
     CsvWriter csv(*csvFile, header);
@@ -472,6 +485,7 @@ int studyCommand(const std::vector<std::string>& words) {
             << (result.updatesToAlarm ? double(*result.updatesToAlarm) : std::nan(""))
             << std::string(toString(result.firstAlarm)) << double(result.blocks) << double(result.alarmedBlocks)
             << result.finalRelativeError << result.parameterCorrelation;
+        for (double v : result.finalSigma) csv << v;
         csv.endRow();
       }
     csv.close();
