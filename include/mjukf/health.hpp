@@ -71,8 +71,9 @@ struct HealthSettings {
   bool enabled = true;
   /// Committed measurement updates per block, ≥ 10.
   int window = 50;
-  /// The false-alarm probability of each test per block, in (0, 0.5). With three tests a block, a run
-  /// of 10⁴ updates (200 blocks) of a consistent filter raises a false alarm with probability ≈ 6e-4.
+  /// The false-alarm probability of each test per block, in (0, 0.5): the NIS test spends α/2 at each
+  /// tail (the lower one an alarm only with `flagSmallInnovations`), the whiteness test α. A run of 10⁴
+  /// updates (200 blocks) of a consistent filter raises a false alarm with probability ≈ 3e-4.
   Scalar falseAlarmProbability = Scalar(1e-6);
   /// A parameter moving more than this many of its standard deviations within a block is running
   /// away; > 0. Only filters that report a parameter covariance (JointUkf, DualUkf, an MJUKF that
