@@ -72,20 +72,24 @@ Outcome run(Filter filter, unsigned seed) {
 
 // Every filter as the gallery sets it up: JUKF and the dual with the prior kPriorSigma, the automatic
 // MJUKF with the state's P₀, Q and R alone (its prior scale of θ is then |θ̂₀|).
+// The level's Q and R, the same in every filter.
+template <class Settings>
+void setLevelNoise(Settings& s) {
+  s.processNoise(0, 0) = kQ;
+  s.measurementNoise(0, 0) = kR;
+}
 template <class Plant>
 Outcome jointUkf(unsigned seed) {
   mjukf::JointUkfSettingsFor<Plant> s;
   s.initialCovariance.diagonal() << 1, kPriorSigma.array().square();
-  s.processNoise(0, 0) = kQ;
-  s.measurementNoise(0, 0) = kR;
+  setLevelNoise(s);
   return run(mjukf::JointUkf<Plant>(Plant(), typename Plant::State(0), kGuess, s), seed);
 }
 template <class Plant>
 Outcome dualUkf(unsigned seed) {
   mjukf::DualUkfSettingsFor<Plant> s;
   s.initialCovariance(0, 0) = 1;
-  s.processNoise(0, 0) = kQ;
-  s.measurementNoise(0, 0) = kR;
+  setLevelNoise(s);
   s.initialParameterCovariance.diagonal() = kPriorSigma.array().square();
   return run(mjukf::DualUkf<Plant>(Plant(), typename Plant::State(0), kGuess, s), seed);
 }
@@ -93,8 +97,7 @@ template <class Plant>
 Outcome automaticMjukf(unsigned seed) {
   mjukf::ModifiedJointUkfSettingsFor<Plant> s;
   s.initialCovariance(0, 0) = 1;
-  s.processNoise(0, 0) = kQ;
-  s.measurementNoise(0, 0) = kR;
+  setLevelNoise(s);
   s.automaticTransformation = true;
   s.adaptiveScaling = true;
   return run(mjukf::ModifiedJointUkf<Plant>(Plant(), typename Plant::State(0), kGuess, s), seed);
