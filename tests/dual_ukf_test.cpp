@@ -166,8 +166,10 @@ class Simulation {
 // (a) θ plays no part: the dual filter's state filter is the Ukf, bit for bit.
 
 // On a model that ignores θ, the parameter filter's Dⱼ = g(Φ_h(x̂; θⱼ), θⱼ) are all the same vector D,
-// and with the default parameter sigma points (α = 1, κ = 0: Wm = (0, ½, ½) for p = 1) their mean is
-// 0·D + ½D + ½D = D exactly, so P_θD and the parameter gain are exactly zero. The state filter then
+// and with parameter sigma points α = 1, κ = 0 (Wm = (0, ½, ½) for p = 1) their mean is
+// 0·D + ½D + ½D = D exactly, so P_θD and the parameter gain are exactly zero. (The default α = 0.1
+// weighs D by −99, 50 and 50, whose sum rounds away from D: θ̂ would then move by rounding, which is
+// not what this test is about, so it sets α = 1.) The state filter then
 // runs with θ̂ = θ̂₀ throughout, which the model ignores anyway, and the UpdatedParameters ordering's
 // second time update repeats the first from the same mean and factor: in both orderings every state
 // quantity must equal the Ukf's with the same state settings bit for bit, over a schedule that mixes
@@ -183,6 +185,7 @@ TEST(DualUkf, IndependentOfThetaItIsTheUkfBitForBit) {
   dualSettings.parameterProcessNoise << 1e-3;
   dualSettings.parameterObservationNoise << 0.02;
   dualSettings.parameterForgetting = 0.99;
+  dualSettings.parameterSigmaPoints = {1.0, 2.0, 0.0};  // exact weights (above)
   const Model::State x0(0.4, -0.1);
   const Model::Param theta0(0.7);
   const double h = 0.01;
@@ -228,11 +231,12 @@ TEST(DualUkf, IndependentOfThetaItIsTheUkfBitForBit) {
 
 // Each correction moves θ̂ by K_θ ν = P_θD P_DD⁻¹ ν, and for this scalar measurement P_DD ≥ R = σ², so
 //   |K_θ ν| ≤ Σⱼ |Wcⱼ| |θⱼ − θ̂| |Dⱼ − D̂| |ν| / σ².
-// Here |θⱼ − θ̂| ≤ γ √P^θ = √2 · 1e-12 (α = 1, β = 2, κ = 0, p = 2: γ = √2, Σ|Wcⱼ| = 2 + 4 · ¼ = 3), and
-// |Dⱼ − D̂| is the sensitivity over one step, ∂x₁(t + h)/∂θ = −(h²/2)(x₁, x₂) + O(h³), times that, plus
-// the rounding of D itself: ≤ 5e-4 · 1.5e-12 + 4 ε · 2.5 ≤ 3e-15 while |x̂| < 2.5 (asserted). With
-// |ν| < 5 (asserted) and σ² = 0.0025: |K_θ ν| ≤ 3 · 1.5e-12 · 3e-15 · 5 / 0.0025 ≈ 3e-23, and P^θ only
-// shrinks. That is six orders of magnitude below half an ulp of θ = (2, 0.4) (≥ 2.7e-17), so
+// Here |θⱼ − θ̂| ≤ γ √P^θ = 0.1 √2 · 1e-12 (the default α = 0.1, β = 2, κ = 0, p = 2: γ = 0.1 √2,
+// Σ|Wcⱼ| = 96.01 + 4 · 25 = 196.01), and |Dⱼ − D̂| is the sensitivity over one step,
+// ∂x₁(t + h)/∂θ = −(h²/2)(x₁, x₂) + O(h³), times that, plus the rounding of D itself:
+// ≤ 5e-4 · 1.5e-13 + 4 ε · 2.5 ≤ 3e-15 while |x̂| < 2.5 (asserted). With |ν| < 5 (asserted) and
+// σ² = 0.0025: |K_θ ν| ≤ 196.01 · 1.5e-13 · 3e-15 · 5 / 0.0025 ≈ 2e-22, and P^θ only
+// shrinks. That is five orders of magnitude below half an ulp of θ = (2, 0.4) (≥ 2.7e-17), so
 // θ̂ + K_θ ν rounds back to θ: θ̂ must stay θ bit for bit. The state filter then runs with exactly θ,
 // and the tolerance this gives on the state is zero: it equals the Ukf given the true θ bit for bit,
 // in both orderings (the second time update of UpdatedParameters repeats the first).

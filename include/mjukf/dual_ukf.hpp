@@ -43,8 +43,12 @@ struct DualUkfSettings : ParameterEstimationSettings<Scalar_, StateDim, MeasDim,
   using ParamMatrix = Eigen::Matrix<Scalar, ParamDim, ParamDim>;
   /// An m × m matrix, as R.
   using MeasMatrix = Eigen::Matrix<Scalar, MeasDim, MeasDim>;
-  /// α, β, κ of the parameter filter's sigma points (L = p); not used by the cubature set.
-  SigmaPointParameters<Scalar> parameterSigmaPoints;
+  /// α, β, κ of the parameter filter's sigma points (L = p); not used by the cubature set. α = 0.1 by
+  /// default (the state filter's is 1): the parameter filter observes y through the state filter's
+  /// prediction at θ̂, extrapolated to each θⱼ to first order by W, and a wide P^θ's points at ±√p σ reach
+  /// parameters where the model is unstable or singular (a negative time constant); θ̂ ± 0.1 √p σ stays
+  /// near θ̂ (docs/algorithms.md §9).
+  SigmaPointParameters<Scalar> parameterSigmaPoints{Scalar(0.1), Scalar(2), Scalar(0)};
   /// P^θ₀, the initial parameter covariance, symmetric positive definite.
   ParamMatrix initialParameterCovariance = ParamMatrix::Zero();
   /// Q_θ of the parameters' random walk, added at every time update, symmetric positive semi-definite.

@@ -135,9 +135,10 @@ FilterSetup<Experiment> filterSetup(const Arguments& args) {
       static_cast<int>(args.integer("--every", setup.measurementEvery, 1, std::numeric_limits<int>::max()));
   overrideVector(args, "--x0", setup.initialState);
   overrideVector(args, "--theta0", setup.initialParameters);
-  // The dual UKF's two filters (state and parameters) take the same α, β, κ.
+  // α, β, κ of the dual UKF's state filter; its parameter filter keeps its own (α = 0.1 by default, points
+  // near θ̂: docs/algorithms.md §9).
   for (auto* sigma : {&setup.ukf.sigmaPoints, &setup.jointUkf.sigmaPoints, &setup.modifiedJointUkf.sigmaPoints,
-                      &setup.dualUkf.sigmaPoints, &setup.dualUkf.parameterSigmaPoints}) {
+                      &setup.dualUkf.sigmaPoints}) {
     sigma->alpha = args.number("--alpha", sigma->alpha);
     sigma->beta = args.number("--beta", sigma->beta);
     sigma->kappa = args.number("--kappa", sigma->kappa);

@@ -35,7 +35,7 @@ void printUsage(std::ostream& out) {
       << "      loop_seconds. dual is the dual UKF with the library's settings (the paper runs none).\n"
       << "      Settings (diagonals take one number or a comma-separated list):\n"
       << "      --every N  --step H  --rmse-from ROW  --x0 LIST  --theta0 LIST  --alpha A  --beta B  --kappa K\n"
-      << "      --p0 DIAG  --q DIAG  --r DIAG (dual: of its state filter; alpha, beta, kappa: of both filters);\n"
+      << "      --p0 DIAG  --q DIAG  --r DIAG (dual: of its state filter, alpha, beta, kappa too);\n"
       << "      mjukf only: --xi X|LIST (one for every parameter, or one each)  --p-theta LIST  --transform LIST "
          "(row-major);\n"
       << "      dual only: --ordering prior|updated (the state's time update with the prior or the corrected\n"

@@ -572,7 +572,7 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
   // S with S Sᵀ = Σ Wcᵢ dᵢ dᵢᵀ + E Eᵀ, E the columns of `stack` after the first Count, which the caller
   // has set: the dᵢ of nonnegative weight, scaled by √Wcᵢ, are triangularised together with E
   // (lowerFactorOfOuter; a point of negative weight leaves a zero column), then S is downdated by
-  // √|Wcᵢ| dᵢ for each negative weight (Wc₀ < 0 when α < 1). False when either fails.
+  // √|Wcᵢ| dᵢ for each negative weight (Wc₀ < 0 when α < 0.52 with β = 2, κ = 0). False when either fails.
   template <int Rows, int Cols>
   bool weightedFactor(const Eigen::Matrix<Scalar, Rows, Count>& d, Eigen::Matrix<Scalar, Rows, Cols>& stack,
                       Eigen::Matrix<Scalar, Rows, Rows>& s) const {
