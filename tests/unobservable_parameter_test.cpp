@@ -70,14 +70,15 @@ Outcome run(Filter filter, unsigned seed) {
   return out;
 }
 
-// Every filter as the gallery sets it up: JUKF and the dual with the prior kPriorSigma, the automatic
-// MJUKF with the state's P₀, Q and R alone (its prior scale of θ is then |θ̂₀|).
 // The level's Q and R, the same in every filter.
 template <class Settings>
 void setLevelNoise(Settings& s) {
   s.processNoise(0, 0) = kQ;
   s.measurementNoise(0, 0) = kR;
 }
+
+// Every filter as the gallery sets it up: JUKF and the dual with the prior kPriorSigma, the automatic
+// MJUKF with the state's P₀, Q and R alone (its prior scale of θ is then |θ̂₀|).
 template <class Plant>
 Outcome jointUkf(unsigned seed) {
   mjukf::JointUkfSettingsFor<Plant> s;
