@@ -5,7 +5,9 @@
 //   valgrind --tool=callgrind --collect-atstart=no mjukf_instruction_counts [substring]
 //
 // For each case (<kind>/<plant>/<filter>/<scalar>, kind step, step_sr (the square-root covariance
-// form), open or floor) it takes kWarmUp steps
+// form), open or floor; and the smallest chain of the scaling benchmark, n = 2, p = 1, as
+// <kind>/chain_n2_p1/<filter>/double, kind step or floor, and the JUKF's step with its time update
+// subdivided into 4 and 8 RK4 steps, step4/… and step8/…: chain_cases.hpp) it takes kWarmUp steps
 // uncounted, then counts kCounted steps and dumps callgrind's totals under the case's name; per step is
 // the total over kCounted. Run natively, it runs the same steps and counts nothing.
 
@@ -16,6 +18,7 @@
 #include <valgrind/callgrind.h>
 
 #include "bench_support.hpp"
+#include "chain_cases.hpp"
 #include "step_cases.hpp"
 
 namespace mjukf::bench {
@@ -50,6 +53,24 @@ bool countFilter(const char* only) {
          count<FloorSteps<Kind, Experiment>>("floor" + suffix, only);
 }
 
+template <FilterKind Kind, class Model>
+bool countChainFilter(const char* only) {
+  const std::string suffix = std::string("/chain_n") + std::to_string(Model::StateDim) + "_p" +
+                             std::to_string(Model::ParamDim) + "/" + filterName(Kind) + "/" +
+                             scalarName<typename Model::Scalar>();
+  const bool subdivided = Kind != FilterKind::Jukf || (count<ChainSteps<Kind, Model, 4>>("step4" + suffix, only) &&
+                                                       count<ChainSteps<Kind, Model, 8>>("step8" + suffix, only));
+  return subdivided && count<ChainSteps<Kind, Model>>("step" + suffix, only) &&
+         count<ChainFloorSteps<Kind, Model>>("floor" + suffix, only);
+}
+
+template <class Model>
+bool countChain(const char* only) {
+  return countChainFilter<FilterKind::Ukf, Model>(only) && countChainFilter<FilterKind::Jukf, Model>(only) &&
+         countChainFilter<FilterKind::Mjukf, Model>(only) && countChainFilter<FilterKind::MjukfAuto, Model>(only) &&
+         countChainFilter<FilterKind::Dual, Model>(only);
+}
+
 template <class Experiment>
 bool countPlant(const char* only) {
   return countFilter<FilterKind::Ukf, Experiment>(only) && countFilter<FilterKind::Jukf, Experiment>(only) &&
@@ -64,7 +85,8 @@ int main(int argc, char** argv) {
   using namespace mjukf::bench;
   const char* only = argc > 1 ? argv[1] : nullptr;
   const bool ok = countPlant<RobotOf<double>>(only) && countPlant<TankOf<double>>(only) &&
-                  countPlant<RobotOf<float>>(only) && countPlant<TankOf<float>>(only);
+                  countPlant<RobotOf<float>>(only) && countPlant<TankOf<float>>(only) &&
+                  countChain<Chain<double, 2, 1>>(only);
   if (!ok) std::fprintf(stderr, "a filter refused a step: its counts are not those of the schedule\n");
   return ok ? 0 : 1;
 }

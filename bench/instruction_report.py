@@ -11,7 +11,7 @@ import glob
 import os
 import sys
 
-PLANTS = ["flexible_joint", "coupled_tank"]
+PLANTS = ["flexible_joint", "coupled_tank", "chain_n2_p1"]
 FILTERS = ["ukf", "jukf", "mjukf", "mjukf_auto", "dual"]
 LABELS = {"ukf": "UKF", "jukf": "JUKF", "mjukf": "MJUKF", "mjukf_auto": "MJUKF automatic", "dual": "dual"}
 TRIGGER = "desc: Trigger: Client Request: "
@@ -61,6 +61,31 @@ def main():
                 print(f"| {p} | {LABELS[f]} | {scalar} | {cell('step' + s)} | {cell('floor' + s)} | "
                       f"{ratio('step' + s, 'floor' + s)} | {cell('open' + s)} | {cell('step_sr' + s)} | "
                       f"{ratio('step_sr' + s, 'step' + s)} |")
+
+    # Issue 21's goals on the smallest chain (bench/chain_cases.hpp: RK4, the input 2 sin(3t) evaluated
+    # three times a step, which the floor counts too).
+    goals = (("jukf", 1300), ("mjukf", 1000))
+    if all(f"step/chain_n2_p1/{f}/double" in per_step for f, _ in goals):
+        print()
+        print("The chain at n = 2, p = 1 (`chain_n2_p1`, bench/chain_cases.hpp), against the instruction goals:")
+        print()
+        print("| filter | goal | step | floor | |")
+        print("|---|---|---|---|---|")
+        for f, goal in goals:
+            step = per_step[f"step/chain_n2_p1/{f}/double"]
+            print(f"| {LABELS[f]} | ≤ {goal:,} | {step:,.0f} | {cell(f'floor/chain_n2_p1/{f}/double')} | "
+                  f"{'met' if step <= goal else '**missed**'} |")
+    sub = [(n, f"step{n}/chain_n2_p1/jukf/double") for n in (4, 8)]
+    if all(name in per_step for _, name in sub):
+        print()
+        print("The chain's JUKF with each 1 ms time update subdivided into RK4 steps (`step4/…`, `step8/…`):")
+        print()
+        print("| RK4 steps per update | step | step / one-step step |")
+        print("|---|---|---|")
+        one = "step/chain_n2_p1/jukf/double"
+        print(f"| 1 | {cell(one)} | 1.00 |")
+        for n, name in sub:
+            print(f"| {n} | {cell(name)} | {ratio(name, one)} |")
 
 
 if __name__ == "__main__":

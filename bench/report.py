@@ -134,8 +134,8 @@ def main():
     w("How the cost grows with the size of the model (a chain of masses, n = 2 … 32, every filter beside its")
     w("floor, the cost exponent), the kernels chosen by size with the measurements behind their thresholds,")
     scaling_page = "docs/performance-scaling.md"  # linked relative to docs/
-    name = os.path.basename(scaling_page)
-    w(f"and the compile time and memory of a filter: [{name}]({name}),")
+    scaling_name = os.path.basename(scaling_page)
+    w(f"and the compile time and memory of a filter: [{scaling_name}]({scaling_name}),")
     w("written by `scripts/scaling.sh`.")
     w("")
     w(f"Run: {ctx.get('date', '?')} at commit `{commit}` (plus the working tree), {ctx.get('num_cpus', '?')} CPUs at "
@@ -194,6 +194,7 @@ def main():
             w("")
             w("Counted by `bash scripts/instructions.sh` (`mjukf_instruction_counts` under")
             w("`valgrind --tool=callgrind`): the same step, floor and open-loop cases as the benchmarks below,")
+            w(f"and the smallest chain of [{scaling_name}]({scaling_name}) (n = 2, p = 1, bench/chain_cases.hpp),")
             w("in instructions, which do not depend on the load of the machine. Instructions are not time: a")
             w("`sin` or a division costs many cycles, a vectorised add few; compare a change's counts, not a")
             w("count with a time.")

@@ -4,12 +4,15 @@
 // refuses, and only a commit changes the estimate. The filters' tests check the same through the
 // public API; these check the arithmetic where it is written, in both covariance forms (the square-root
 // form's prediction and correction are Householder factors and downdates, not sums: the same Kalman
-// answer). Tolerances: rounding of sums of 2L + 1 terms of size ‖P‖, a few hundred ε.
+// answer). Tolerances: rounding of sums of 2L + 1 terms of size ‖P‖, a few hundred ε. And the shared
+// input of a time update: every request answered with input(t) itself, input(t) evaluated once per time.
 
 #include <limits>
 #include <random>
+#include <set>
 #include <string>
 #include <type_traits>
+#include <vector>
 
 #include <Eigen/LU>
 #include <gtest/gtest.h>
@@ -139,6 +142,47 @@ TYPED_TEST(EngineEstimate, AssignRefusesWhatHasNoFactorAndChangesNothing) {
   EXPECT_FALSE(e.assign(Eigen::Vector3d::Constant(NAN), Eigen::Matrix3d::Identity()));
   EXPECT_EQ(e.mean(), c.x);
   EXPECT_EQ(e.covariance(), before);
+}
+
+// A model's input signal that counts its evaluations; its value is a function of t alone, as model.hpp
+// requires, and differs at every time asked below.
+struct CountingSignal {
+  using Scalar = double;
+  using Input = Eigen::Vector2d;
+  mutable int evaluations = 0;
+  Input input(double t) const {
+    ++evaluations;
+    return Input(t, -3.0 * t);
+  }
+};
+
+// The points of a time update ask for the same times in the same order (RK4: t, t + h/2 twice, t + h per
+// step); each answer must be input(t) exactly, and input(t) is evaluated once per distinct time while
+// there are no more of them than the cache holds (8: three RK4 steps), and at least once beyond.
+TEST(SharedSignalInput, AnswersEveryRequestWithInputAtThatTimeAndEvaluatesEachTimeOnce) {
+  for (const int steps : {1, 2, 3, 4, 8}) {
+    const CountingSignal signal;
+    const mjukf::detail::SharedSignalInput<CountingSignal> shared(signal);
+    std::vector<double> times;
+    for (int k = 0; k < steps; ++k)
+      for (const double c : {0.0, 0.5, 0.5, 1.0}) times.push_back(0.1 * k + 0.1 * c);
+    constexpr int points = 7;
+    for (int i = 0; i < points; ++i)
+      for (const double t : times) ASSERT_EQ(shared(t), signal.input(t)) << "steps " << steps << ", point " << i;
+    // 2 steps + 1 times in exact arithmetic; a step's end and the next one's start may round apart.
+    const int distinct = static_cast<int>(std::set<double>(times.begin(), times.end()).size());
+    const int evaluations = signal.evaluations - points * static_cast<int>(times.size());  // less the ASSERTs'
+    if (distinct <= 8)
+      EXPECT_EQ(evaluations, distinct) << "steps " << steps;
+    else
+      EXPECT_GE(evaluations, distinct) << "steps " << steps;
+    EXPECT_TRUE(shared.allValuesFinite());
+    // Out of order: a time asked before, then the first one, then a new one.
+    const std::size_t middle = times.size() / 2;
+    EXPECT_EQ(shared(times[middle]), signal.input(times[middle]));
+    EXPECT_EQ(shared(times[0]), signal.input(times[0]));
+    EXPECT_EQ(shared(-1.0), signal.input(-1.0));
+  }
 }
 
 }  // namespace
