@@ -12,6 +12,7 @@
 #include <set>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <Eigen/LU>
@@ -159,13 +160,15 @@ struct CountingSignal {
 // The points of a time update ask for the same times in the same order (RK4: t, t + h/2 twice, t + h per
 // step); each answer must be input(t) exactly, and input(t) is evaluated once per distinct time while
 // there are no more of them than the cache holds (8: three RK4 steps), and at least once beyond.
-TEST(SharedSignalInput, AnswersEveryRequestWithInputAtThatTimeAndEvaluatesEachTimeOnce) {
-  for (const int steps : {1, 2, 3, 4, 8}) {
+TEST(SharedSignalInput, AnswersEveryRequestWithInputAtThatTimeAndEvaluatesEachTimeOnceWhileTheRingHoldsThem) {
+  // (steps, one more time after them): 3 steps and one more fill the ring exactly.
+  for (const auto& [steps, extra] : {std::pair{1, false}, {2, false}, {3, false}, {3, true}, {4, false}, {8, false}}) {
     const CountingSignal signal;
     const mjukf::detail::SharedSignalInput<CountingSignal> shared(signal);
     std::vector<double> times;
     for (int k = 0; k < steps; ++k)
       for (const double c : {0.0, 0.5, 0.5, 1.0}) times.push_back(0.1 * k + 0.1 * c);
+    if (extra) times.push_back(-0.5);
     constexpr int points = 7;
     for (int i = 0; i < points; ++i)
       for (const double t : times) ASSERT_EQ(shared(t), signal.input(t)) << "steps " << steps << ", point " << i;
