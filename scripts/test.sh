@@ -1,22 +1,40 @@
 #!/usr/bin/env bash
-# Sets up, builds and runs every test: bash scripts/test.sh [build-dir]
-#   1. Release build of everything with g++ (CMake preset `release`) and its whole test suite (the
-#      format check of the C++ sources, scripts/check_format.sh, included), then the API reference
-#      (target mjukf_docs, doxygen warnings as errors);
+# Sets up, builds and runs the tests: bash scripts/test.sh [--all] [build-dir]
+#
+# Without --all (what CI runs, within its time): the quick test tier (MJUKF_TEST_TIER=quick,
+# tests/CMakeLists.txt lists it and what it leaves out), in build-quick/ unless a build-dir is given:
+#   1. Release build of the library, the quick tier, the paper's two example programs and the firmware's
+#      host program with g++ (CMake preset `quick`), and their tests under ctest (the format check of the
+#      C++ sources, scripts/check_format.sh, included), then the API reference (target mjukf_docs,
+#      doxygen warnings as errors);
 #   2. the firmware example built for a Cortex-M4F and run under QEMU, its estimates compared with the
 #      host's (scripts/embedded.sh, docs/embedded.md); MJUKF_SKIP_EMBEDDED=1 skips it;
-#   3. the same suite built with clang, AddressSanitizer and UndefinedBehaviorSanitizer (preset
-#      `asan-ubsan`, in <build-dir>-asan; without the allocation, compile-only and compiler-flag tests,
-#      MJUKF_SANITIZER_SUBSET in tests/CMakeLists.txt), then the libFuzzer target of that build on the inputs that
-#      once failed and a short smoke run (docs/robustness.md records the long run).
+#   3. clang with AddressSanitizer and UndefinedBehaviorSanitizer (preset `asan-ubsan`, in
+#      <build-dir>-asan): the libFuzzer target on the inputs that once failed and a short smoke run,
+#      and the CSV reader's and the engine's tests.
+# With --all: every test (preset `release`, with the benchmarks, in build/), the firmware, and then
+# the whole suite again under the sanitizers (without the allocation, compile-only and compiler-flag
+# tests, MJUKF_SANITIZER_SUBSET in tests/CMakeLists.txt) before the fuzz runs: about 75 minutes on 2
+# cores (README).
 # MJUKF_SKIP_SANITIZERS=1 skips step 3.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+tier=quick
+if [ "${1:-}" = --all ]; then
+  tier=all
+  shift
+fi
 bash scripts/setup.sh
-build=${1:-build}
 jobs=$(nproc)
+if [ "$tier" = all ]; then
+  preset=release
+  build=${1:-build}
+else
+  preset=quick
+  build=${1:-build-quick}
+fi
 
-cmake --preset release -B "$build"
+cmake --preset "$preset" -B "$build"
 cmake --build "$build" -j "$jobs"
 ctest --test-dir "$build" --output-on-failure -j "$jobs"
 # ctest ran the format check (format_check) and would report it skipped without clang-format 14; here
@@ -32,9 +50,16 @@ cmake --build "$build" --target mjukf_docs
 
 # Any sanitizer report fails its test: nothing recovers (-fno-sanitize-recover=all), errors abort.
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
-cmake --preset asan-ubsan -B "$build-asan"
-cmake --build "$build-asan" -j "$jobs"
-ctest --test-dir "$build-asan" --output-on-failure -j "$jobs"
+if [ "$tier" = all ]; then
+  cmake --preset asan-ubsan -B "$build-asan"
+  cmake --build "$build-asan" -j "$jobs"
+  ctest --test-dir "$build-asan" --output-on-failure -j "$jobs"
+else
+  cmake --preset asan-ubsan -B "$build-asan" -DMJUKF_TEST_TIER=quick -DMJUKF_BUILD_EXAMPLES=OFF
+  cmake --build "$build-asan" -j "$jobs" --target mjukf_fuzz csv_reader_test engine_test
+  "$build-asan"/tests/csv_reader_test
+  "$build-asan"/tests/detail/engine_test
+fi
 fuzz="$build-asan"/tests/fuzz/mjukf_fuzz
 "$fuzz" tests/fuzz/regressions/*
 "$fuzz" -runs=20000 -seed=1 -max_len=1024

@@ -154,6 +154,14 @@ using Tank = mjukf::paper::CoupledTankExperiment<double>;
 using RobotF = mjukf::paper::FlexibleJointExperiment<float>;
 constexpr auto kPrior = mjukf::DualUkfOrdering::PriorParameters;
 constexpr auto kUpdated = mjukf::DualUkfOrdering::UpdatedParameters;
+#ifdef MJUKF_NO_ALLOCATION_CORE
+// The quick tier's core (tests/CMakeLists.txt): each filter kind, in double and float, the automatic
+// MJUKF, a discrete-time model and the square-root form, one case each.
+using Cases =
+    ::testing::Types<Case<mjukf::Ukf, Robot>, Case<mjukf::JointUkf, Tank>, Case<mjukf::ModifiedJointUkf, RobotF>,
+                     DualCase<Robot, kUpdated>, Automatic<Case<mjukf::ModifiedJointUkf, Robot>>,
+                     DiscreteCase<mjukf::DualUkf, double, kPrior>, Case<SquareRoot<mjukf::JointUkf>::Filter, Robot>>;
+#else
 using Cases = ::testing::Types<
     Case<mjukf::Ukf, Robot>, Case<mjukf::JointUkf, Robot>, Case<mjukf::ModifiedJointUkf, Robot>, Case<mjukf::Ukf, Tank>,
     Case<mjukf::JointUkf, Tank>, Case<mjukf::ModifiedJointUkf, Tank>, Case<mjukf::ModifiedJointUkf, RobotF>,
@@ -178,6 +186,7 @@ using Cases = ::testing::Types<
     DiscreteCase<SquareRoot<mjukf::DualUkf>::Filter, float, kUpdated>,
     Automatic<Case<SquareRoot<mjukf::ModifiedJointUkf>::Filter, Robot>>,
     AlphaBelowOne<Case<SquareRoot<mjukf::JointUkf>::Filter, Robot>>, AlphaBelowOne<Case<mjukf::JointUkf, Robot>>>;
+#endif
 TYPED_TEST_SUITE(NoAllocation, Cases);
 
 TYPED_TEST(NoAllocation, EveryPerStepCall) {
@@ -318,6 +327,7 @@ TEST(NoAllocation, CallsWithoutInput) {
   expectNoAllocationWithoutInput<mjukf::DualUkf<Pendulum, Rk4>>();
 }
 
+#ifndef MJUKF_NO_ALLOCATION_CORE
 // The kernels' general forms (matrix products, rank-k update, blocked LLT; detail/linear_algebra.hpp)
 // allocate nothing either: a JUKF at L = 36 and a float UKF at L = 32 on the chain of masses, on the heap
 // (about 190 KB and 60 KB).
@@ -346,6 +356,8 @@ TEST(NoAllocation, GeneralKernelsAtLargeSize) {
   expectNoAllocationAtLargeSize<JointD>(ChainD::trueParameters(), mjukf::bench::ChainExperiment<ChainD>::jointUkf());
   expectNoAllocationAtLargeSize<UkfF>(ChainF::trueParameters(), mjukf::bench::ChainExperiment<ChainF>::ukf());
 }
+
+#endif
 
 // The witnesses work: an allocation inside the window is seen by both.
 int* volatile sink = nullptr;  // volatile: the compiler may not elide the new/delete pair
