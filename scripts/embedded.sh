@@ -96,7 +96,7 @@ compare_runs() {
 }
 
 echo "== firmware: build (-O2), symbols, run under QEMU, compare with the host's float run"
-build_firmware "$out/O2" -O2 robot_all
+build_firmware "$out/O2" -O2 robot_all robot_all_lean  # both at once: one compile each, in parallel
 image="$out/O2/robot_all.elf"
 check_symbols "$image"
 run_firmware "$image" "$out/target.txt" || { cat "$out/target.txt"; echo "error: the firmware failed" >&2; exit 1; }
@@ -106,7 +106,6 @@ cmake --build "$host" -j "$jobs" --target mjukf_embedded_host
 compare_runs "$out/target.txt" "$out/host.txt"
 
 echo "== firmware without the health monitor and the automatic modes (-O2): symbols, run, the same estimates"
-build_firmware "$out/O2" -O2 robot_all_lean
 check_symbols "$out/O2/robot_all_lean.elf"
 run_firmware "$out/O2/robot_all_lean.elf" "$out/target-lean.txt" ||
   { cat "$out/target-lean.txt"; echo "error: the firmware without the optional features failed" >&2; exit 1; }
