@@ -75,6 +75,19 @@ inline const char* filterName(FilterKind kind) {
   return "?";
 }
 
+/// Propagations per time update of a filter of kind `Kind` (its type `Filter`) whose model has
+/// `ParamDim` parameters: its sigma points; the dual's are its two filters', (2n + 1) + (2p + 1); the
+/// automatic MJUKF adds the p forward differences of its sensitivities.
+template <FilterKind Kind, class Filter, int ParamDim>
+constexpr int propagationsPerUpdate() {
+  if constexpr (Kind == FilterKind::Dual)
+    return Filter::SigmaPointCount + Filter::ParameterSigmaPointCount;
+  else if constexpr (Kind == FilterKind::MjukfAuto)
+    return Filter::SigmaPointCount + ParamDim;
+  else
+    return Filter::SigmaPointCount;
+}
+
 /// The filter of kind `Kind` over `Model`, with the default stepper and sigma points, in the covariance
 /// form `Form` (covariance_form.hpp).
 template <FilterKind Kind, class Model, class Form = FullCovariance>

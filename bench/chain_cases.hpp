@@ -68,16 +68,10 @@ const std::vector<typename Model::Meas>& chainMeasurements() {
   return y;
 }
 
-/// Propagations per time update, as step_cases.hpp's pointCount counts them.
+/// Propagations per time update of a filter over the chain (bench_support.hpp).
 template <FilterKind Kind, class Model>
 constexpr int chainPointCount() {
-  using F = ChainFilter<Kind, Model>;
-  if constexpr (Kind == FilterKind::Dual)
-    return F::SigmaPointCount + F::ParameterSigmaPointCount;
-  else if constexpr (Kind == FilterKind::MjukfAuto)
-    return F::SigmaPointCount + Model::ParamDim;
-  else
-    return F::SigmaPointCount;
+  return propagationsPerUpdate<Kind, ChainFilter<Kind, Model>, Model::ParamDim>();
 }
 
 template <FilterKind Kind, class Model, int Steps = 1>

@@ -58,9 +58,12 @@ bool countChainFilter(const char* only) {
   const std::string suffix = std::string("/chain_n") + std::to_string(Model::StateDim) + "_p" +
                              std::to_string(Model::ParamDim) + "/" + filterName(Kind) + "/" +
                              scalarName<typename Model::Scalar>();
-  const bool subdivided = Kind != FilterKind::Jukf || (count<ChainSteps<Kind, Model, 4>>("step4" + suffix, only) &&
-                                                       count<ChainSteps<Kind, Model, 8>>("step8" + suffix, only));
-  return subdivided && count<ChainSteps<Kind, Model>>("step" + suffix, only) &&
+  if constexpr (Kind == FilterKind::Jukf) {  // the time update subdivided: the JUKF's only
+    if (!count<ChainSteps<Kind, Model, 4>>("step4" + suffix, only) ||
+        !count<ChainSteps<Kind, Model, 8>>("step8" + suffix, only))
+      return false;
+  }
+  return count<ChainSteps<Kind, Model>>("step" + suffix, only) &&
          count<ChainFloorSteps<Kind, Model>>("floor" + suffix, only);
 }
 

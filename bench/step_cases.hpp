@@ -27,17 +27,10 @@ const std::vector<typename Experiment::Model::Meas>& measurements() {
   return y;
 }
 
-/// Propagations per time update of a filter: its sigma points; the dual's are its two filters',
-/// (2n + 1) + (2p + 1); the automatic MJUKF adds the p forward differences of its sensitivities.
+/// Propagations per time update of a filter over one of the paper's models (bench_support.hpp).
 template <FilterKind Kind, class Model>
 constexpr int pointCount() {
-  using F = FilterType<Kind, Model>;
-  if constexpr (Kind == FilterKind::Dual)
-    return F::SigmaPointCount + F::ParameterSigmaPointCount;
-  else if constexpr (Kind == FilterKind::MjukfAuto)
-    return F::SigmaPointCount + Model::ParamDim;
-  else
-    return F::SigmaPointCount;
+  return propagationsPerUpdate<Kind, FilterType<Kind, Model>, Model::ParamDim>();
 }
 
 /// Evaluations of the derivative and the input in one step (a measurement step or an open-loop one),
