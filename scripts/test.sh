@@ -14,24 +14,31 @@
 #      and the CSV reader's and the engine's tests.
 # With --all: every test (preset `release`, with the benchmarks, in build/), the firmware, and then
 # the whole suite again under the sanitizers (without the allocation, compile-only and compiler-flag
-# tests, MJUKF_SANITIZER_SUBSET in tests/CMakeLists.txt) before the fuzz runs: about 75 minutes on 2
+# tests, MJUKF_SANITIZER_SUBSET in tests/CMakeLists.txt) before the fuzz runs: well over an hour on 2
 # cores (README).
 # MJUKF_SKIP_SANITIZERS=1 skips step 3.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 tier=quick
-if [ "${1:-}" = --all ]; then
-  tier=all
-  shift
-fi
+build=
+for arg in "$@"; do
+  case $arg in
+    --all) tier=all ;;
+    -*) echo "error: unknown option $arg; usage: bash scripts/test.sh [--all] [build-dir]" >&2; exit 2 ;;
+    *)
+      [ -z "$build" ] || { echo "error: more than one build directory; usage: bash scripts/test.sh [--all] [build-dir]" >&2; exit 2; }
+      build=$arg
+      ;;
+  esac
+done
 bash scripts/setup.sh
 jobs=$(nproc)
 if [ "$tier" = all ]; then
   preset=release
-  build=${1:-build}
+  build=${build:-build}
 else
   preset=quick
-  build=${1:-build-quick}
+  build=${build:-build-quick}
 fi
 
 cmake --preset "$preset" -B "$build"
@@ -56,7 +63,7 @@ if [ "$tier" = all ]; then
   ctest --test-dir "$build-asan" --output-on-failure -j "$jobs"
 else
   cmake --preset asan-ubsan -B "$build-asan" -DMJUKF_TEST_TIER=quick -DMJUKF_BUILD_EXAMPLES=OFF
-  cmake --build "$build-asan" -j "$jobs" --target mjukf_fuzz csv_reader_test engine_test
+  cmake --build "$build-asan" -j "$jobs" --target mjukf_sanitizer_stage  # the fuzz target and the two tests
   "$build-asan"/tests/csv_reader_test
   "$build-asan"/tests/detail/engine_test
 fi
