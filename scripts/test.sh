@@ -19,14 +19,15 @@
 # MJUKF_SKIP_SANITIZERS=1 skips step 3.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+usage="usage: bash scripts/test.sh [--all] [build-dir]"
 tier=quick
 build=
 for arg in "$@"; do
   case $arg in
     --all) tier=all ;;
-    -*) echo "error: unknown option $arg; usage: bash scripts/test.sh [--all] [build-dir]" >&2; exit 2 ;;
+    -*) echo "error: unknown option $arg; $usage" >&2; exit 2 ;;
     *)
-      [ -z "$build" ] || { echo "error: more than one build directory; usage: bash scripts/test.sh [--all] [build-dir]" >&2; exit 2; }
+      [ -z "$build" ] || { echo "error: more than one build directory; $usage" >&2; exit 2; }
       build=$arg
       ;;
   esac
