@@ -29,8 +29,10 @@ struct HealthMonitor {};
 /// The MJUKF's automatic modes (parameter_sensitivity.hpp, docs/tuning-mjukf.md): the settings
 /// `automaticTransformation` and `adaptiveScaling`, the sensitivities they follow and `sensitivity()`,
 /// and the covariance of θ̂ that follows the same sensitivities (`followParameterCovariance`;
-/// `parameterCovariance()` is then NaN, unknown). Only `ModifiedJointUkf` has them; the other filters
-/// accept the tag and are unchanged by it. Compiled out, the three settings must be false.
+/// `parameterCovariance()` is then NaN, unknown), with what it adds to the state's covariance
+/// (`parameterUncertaintyInState`, which acts only with `adaptiveScaling`). Only `ModifiedJointUkf` has
+/// them; the other filters accept the tag and are unchanged by it. Compiled out, the first three
+/// settings must be false.
 struct AutomaticModes {};
 }  // namespace feature
 

@@ -111,6 +111,13 @@ struct ModifiedJointUkfSettings : ParameterEstimationSettings<Scalar_, StateDim,
   /// evaluations of g. false: the paper's MJUKF and its cost (the paper presets), and
   /// `parameterCovariance()` is NaN, unknown.
   bool followParameterCovariance = true;
+  /// With `adaptiveScaling`: true (the default) adds to each time update's Q what the uncertainty of
+  /// θ̂ (`parameterCovariance()`) adds to the state's error over the interval, so that the state's
+  /// covariance, and with it the gain, accounts for the model's parameters being uncertain
+  /// (docs/algorithms.md §5.2, docs/tuning-mjukf.md), and eases the parameters' steps in over a tenth
+  /// of the memory. false: the state's covariance holds what its own sigma points and θᵢ carry alone,
+  /// and the easing takes a fiftieth (the automatic MJUKF before this setting).
+  bool parameterUncertaintyInState = true;
 };
 
 /// \cond INTERNAL
@@ -244,10 +251,22 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
                            [&](const State& x, const Param& theta) { return step.propagate(theta, x); });
     else
       sensitivity_.keepPrediction(step.interval());
-    errorCovariance_.predict(priorPoints_, points, parameterPoints_, before,
-                             refreshDue ? &sensitivity_.derivative() : nullptr,
-                             sensitivity_.candidateStateSensitivity(), step.settings.processNoise,
-                             refreshDue ? sensitivity_.extrapolation() : Scalar(1));
+    const bool found = errorCovariance_.predict(priorPoints_, points, parameterPoints_, before,
+                                                refreshDue ? &sensitivity_.derivative() : nullptr,
+                                                sensitivity_.candidateStateSensitivity(), step.settings.processNoise,
+                                                refreshDue ? sensitivity_.extrapolation() : Scalar(1));
+    // The parameters' uncertainty in the state's covariance (docs/algorithms.md §5.2), at a refresh
+    // only: its extrapolation spans the time updates since the last one, so each interval counts once.
+    // A P_θ that is finite but huge is passed on as it is: the state's covariance then says so.
+    addsParameterNoise_ =
+        refreshDue && found && step.settings.adaptiveScaling && step.settings.parameterUncertaintyInState &&
+        errorCovariance_.parameterNoiseFactor(before, sensitivity_.candidateStateSensitivity(), parameterNoise_);
+  }
+  // E of this time update (E Eᵀ added to its Q: the uncertainty of θ̂ in the state's), or null.
+  const typename Est::Matrix* addedProcessNoise() const {
+    if constexpr (Automatic)
+      if (addsParameterNoise_) return &parameterNoise_;
+    return nullptr;
   }
   template <class Step>
   Vector propagateMean(const Step& step, const Vector& mean) {
@@ -274,8 +293,11 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
         const auto measure = [&c](const State& x, const Param& theta) {
           return measureModel(c.model, x, c.input, theta);
         };
+        // The easing's first ramp: a tenth of the memory with the parameters' uncertainty in the
+        // state's covariance, a fiftieth without it (docs/tuning-mjukf.md, "Easing in").
+        const Scalar easing = s.parameterUncertaintyInState ? Scalar(0.1) : Scalar(0.02);
         if (!sensitivity_.correct(c.priorMean, parameters_, measure, c.gainFactor, c.innovationFactor, memory, updates,
-                                  c.present))
+                                  easing, c.present))
           return Status::NonFiniteResult;
       }
     }
@@ -304,8 +326,9 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
     }
     candidateParameters_ = candidateParameterPoints_.rowwise().sum() / Scalar(Count);  // eq. 10
     if (!allFinite(candidateParameterPoints_) || !allFinite(candidateParameters_)) return Status::NonFiniteResult;
+    // P_θ never refuses a step: an unbounded P_θ is reported (and passed on to the state's Q, §5.2).
     if constexpr (Automatic)
-      if (followsSensitivities_) correctErrorCovariance(c);  // never refuses: an unbounded P_θ is reported
+      if (followsSensitivities_) correctErrorCovariance(c);
     return Status::Ok;
   }
   void constrainMean(Vector&) {}
@@ -390,6 +413,9 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<Points, 6> priorPoints_{Points::Zero()};
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<MeasurementByState, 7> measurementJacobian_{MeasurementByState::Zero()};
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<MeasurementByState, 8> stateGainTransposed_{MeasurementByState::Zero()};
+  // E of the time update in progress (parameterUncertaintyInState), and whether it applies.
+  MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<typename Est::Matrix, 9> parameterNoise_{Est::Matrix::Zero()};
+  MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<bool, 10> addsParameterNoise_{false};
   // The automatic modes' state (committed with the parameters).
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<Sensitivity, 1> sensitivity_;
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<long, 2> timeUpdates_{0};

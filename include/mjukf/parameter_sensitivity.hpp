@@ -140,13 +140,14 @@ class ParameterSensitivity {
   /// I ← λ I + (1 − λ) I₀ + ψᵀ P_yy⁻¹ ψ (the prior I₀ is never forgotten) with the forgetting
   /// λ = max(exp(−Δt / memory), exp(−1 / minimumUpdates)), Δt the time since the last correction (a
   /// memory of `memory` time units, and of at least `minimumUpdates` updates however long the
-  /// interval); and the weight w of this update's step (`weight()`).
+  /// interval); and the weight w of this update's step (`weight()`), eased in over the first `easing`
+  /// (a share) of the memory.
   /// `innovationFactor` is the lower Cholesky factor S of P_yy and `whitenedCross` is U = P_xy S⁻ᵀ, so
   /// that K ψ = U (S⁻¹ ψ) (detail/unscented_engine.hpp). Returns false (candidates unspecified) when a
   /// result is not finite.
   template <class Measure, class WhitenedCross>
   bool correct(const State& priorMean, const Param& theta, Measure&& measure, const WhitenedCross& whitenedCross,
-               const MeasMatrix& innovationFactor, Scalar memory, Scalar minimumUpdates,
+               const MeasMatrix& innovationFactor, Scalar memory, Scalar minimumUpdates, Scalar easing,
                const MeasurementMask<M>* present) {
     candidateState_ = state_;
     if (stale_) {
@@ -178,7 +179,7 @@ class ParameterSensitivity {
       memoryUpdates_ =
           forgetting_ < Scalar(1) ? Scalar(-1) / std::log(forgetting_) : std::numeric_limits<Scalar>::infinity();
     }
-    weight_ = std::min(Scalar(1), Scalar(corrections_ + 1) / (kEasing * memoryUpdates_));
+    weight_ = std::min(Scalar(1), Scalar(corrections_ + 1) / (easing * memoryUpdates_));
     if (!(weight_ > Scalar(0))) weight_ = Scalar(1);  // an infinite memory: no easing
     // The share of P_yy that is the sensor's noise, tr(R P_yy⁻¹) / m = |S⁻¹ √R|²_F / m: small while the
     // state estimate is uncertain, at its steady level once it has settled. Against the largest share
@@ -263,7 +264,7 @@ class ParameterSensitivity {
   }
 
   /// The weight w of the step of the measurement update in progress: the smaller of
-  /// (k + 1) / (memory in updates / 50) for the k-th update since the start and the share of P_yy that is
+  /// (k + 1) / (easing · memory in updates) for the k-th update since the start and the share of P_yy that is
   /// sensor noise against the largest share seen, at most 1. While the state estimate settles from its
   /// first guess the innovations are mostly its error, not the parameters'; easing the steps in keeps
   /// that error from moving θ̂ early (docs/tuning-mjukf.md). The information is not weighed: it only says
@@ -309,9 +310,8 @@ class ParameterSensitivity {
   // λ of the last interval, and the memory in updates it makes, −1 / ln λ.
   Scalar forgettingInterval_ = -1, forgettingMemory_ = -1, forgettingUpdates_ = -1, forgetting_ = 1;
   Scalar memoryUpdates_ = std::numeric_limits<Scalar>::infinity();
-  static constexpr Scalar kEasing = Scalar(0.02);        // the adaptation is eased in over this share of the memory
-  Scalar weight_ = 1;                                    // w of the update in progress
-  Scalar largestShare_ = 0, candidateLargestShare_ = 0;  // the largest tr(R P_yy⁻¹) / m seen
+  Scalar weight_ = 1;                                                // w of the update in progress
+  Scalar largestShare_ = 0, candidateLargestShare_ = 0;              // the largest tr(R P_yy⁻¹) / m seen
   Scalar typicalInformation_ = 0, candidateTypicalInformation_ = 0;  // j̄, the running level of j
   // Forgetting by time alone for the first kSettling memories: what the updates bring while the state
   // and θ̂ settle from the first guess is computed about a wrong θ̂ and must not be kept.

@@ -7,6 +7,7 @@
 /// K, its parameter gain G = diag(ξ) T, and the dynamics linearised from its sigma points.
 
 #include <Eigen/Core>
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
 #include "mjukf/detail/linear_algebra.hpp"
@@ -118,6 +119,29 @@ class ParameterErrorCovariance {
     return allFinite(candidate_);
   }
 
+  /// What the uncertainty of θ̂ adds to the state's error over the last `predict` (docs/algorithms.md
+  /// §5.2): the state's error is η + W e, whose W e part the time update carries to A W e where it is
+  /// W⁻ e, so that W⁻ P_θ W⁻ᵀ − (A W) P_θ (A W)ᵀ is missing from a covariance propagated by A alone.
+  /// Its positive semi-definite part E Eᵀ (the parts where the parameters' effect shrinks are dropped:
+  /// conservative) into `factor` = E, from the committed P_θ, `sensitivity` W before the update and
+  /// `predictedSensitivity` W⁻, which must be A W + B of that `predict` (a refresh whose A was found:
+  /// W⁻ = W between refreshes would make this A's contraction, not the parameters' effect). False (E
+  /// unspecified) when a result is not finite.
+  bool parameterNoiseFactor(const StateByParam& sensitivity, const StateByParam& predictedSensitivity,
+                            StateMatrix& factor) {
+    const ParamMatrix parameterCovariance = joint_.template bottomRightCorner<P, P>();
+    carried_.noalias() = jacobian_ * sensitivity;  // A W
+    growth_.noalias() = predictedSensitivity * parameterCovariance * predictedSensitivity.transpose();
+    growth_.noalias() -= carried_ * parameterCovariance * carried_.transpose();
+    if (!allFinite(growth_)) return false;
+    // A local: the solver's members are not initialised, and a filter copies none of its workspace
+    // indeterminate.
+    const Eigen::SelfAdjointEigenSolver<StateMatrix> eigen((growth_ + growth_.transpose()) * Scalar(0.5));
+    if (eigen.info() != Eigen::Success) return false;
+    factor.noalias() = eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(Scalar(0)).cwiseSqrt().asDiagonal();
+    return allFinite(factor);
+  }
+
   void commit() { joint_ = candidate_; }
 
   /// P_θ = cov(e), as committed.
@@ -135,6 +159,8 @@ class ParameterErrorCovariance {
   Joint transition_ = Joint::Zero(), spreadJoint_ = Joint::Zero(), corrected_ = Joint::Zero();
   Eigen::Matrix<Scalar, N + P, M> noiseMap_ = Eigen::Matrix<Scalar, N + P, M>::Zero();
   Eigen::Matrix<Scalar, N + P, M> noiseSpread_ = Eigen::Matrix<Scalar, N + P, M>::Zero();
+  StateByParam carried_ = StateByParam::Zero();  // A W
+  StateMatrix growth_ = StateMatrix::Zero();     // W⁻ P_θ W⁻ᵀ − (A W) P_θ (A W)ᵀ
 };
 
 }  // namespace mjukf::detail
