@@ -258,9 +258,9 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
     // The parameters' uncertainty in the state's covariance (docs/algorithms.md §5.2), at a refresh
     // only: its extrapolation spans the time updates since the last one, so each interval counts once.
     // A P_θ that is finite but huge is passed on as it is: the state's covariance then says so.
-    addsParameterNoise_ =
-        refreshDue && found && step.settings.adaptiveScaling && step.settings.parameterUncertaintyInState &&
-        errorCovariance_.parameterNoiseFactor(before, sensitivity_.candidateStateSensitivity(), parameterNoise_);
+    addsParameterNoise_ = refreshDue && found && step.settings.adaptiveScaling &&
+                          step.settings.parameterUncertaintyInState &&
+                          errorCovariance_.parameterNoiseFactor(before, parameterNoise_);
   }
   // E of this time update (E Eᵀ added to its Q: the uncertainty of θ̂ in the state's), or null.
   const typename Est::Matrix* addedProcessNoise() const {

@@ -78,6 +78,7 @@ class ParameterErrorCovariance {
     if (derivative && found) effect_ = *derivative - jacobian_ * sensitivity;  // B
     // Over the open-loop time too: A ← I + x (A − I), B ← x B.
     jacobian_ = StateMatrix::Identity() + extrapolation * (jacobian_ - StateMatrix::Identity());
+    extrapolation_ = extrapolation;
     transition_.setIdentity();
     transition_.template topLeftCorner<N, N>() = jacobian_;
     StateByParam drift = extrapolation * effect_ - predictedSensitivity;
@@ -121,22 +122,27 @@ class ParameterErrorCovariance {
 
   /// What the uncertainty of θ̂ adds to the state's error over the last `predict` (docs/algorithms.md
   /// §5.2): the state's error is η + W e, whose W e part the time update carries to A W e where it is
-  /// W⁻ e, so that W⁻ P_θ W⁻ᵀ − (A W) P_θ (A W)ᵀ is missing from a covariance propagated by A alone.
-  /// Its positive semi-definite part E Eᵀ (the parts where the parameters' effect shrinks are dropped:
-  /// conservative) into `factor` = E, from the committed P_θ, `sensitivity` W before the update and
-  /// `predictedSensitivity` W⁻, which must be A W + B of that `predict` (a refresh whose A was found:
-  /// W⁻ = W between refreshes would make this A's contraction, not the parameters' effect). False (E
-  /// unspecified) when a result is not finite.
-  bool parameterNoiseFactor(const StateByParam& sensitivity, const StateByParam& predictedSensitivity,
-                            StateMatrix& factor) {
+  /// W⁻ e = (A W + B) e, so that W⁻ P_θ W⁻ᵀ − (A W) P_θ (A W)ᵀ is missing from a covariance propagated
+  /// by A alone. It is formed as (A W) P_θ Bᵀ + B P_θ (A W)ᵀ + B P_θ Bᵀ, never as the difference, which
+  /// cancels: with millisecond steps B is a thousandth of W, and the difference's rounding made the
+  /// automatic MJUKF's result depend on the compiler's (tests/flags/). A and B are the last `predict`'s,
+  /// extrapolated over its open-loop time, for a `predict` that refreshed the sensitivities and found A
+  /// (between refreshes B would be stale). Its positive semi-definite part E Eᵀ (the parts where the
+  /// parameters' effect shrinks are dropped: conservative) into `factor` = E, from the committed P_θ and
+  /// `sensitivity`, W before the update. False (E unspecified) when a result is not finite.
+  bool parameterNoiseFactor(const StateByParam& sensitivity, StateMatrix& factor) {
     const ParamMatrix parameterCovariance = joint_.template bottomRightCorner<P, P>();
     carried_.noalias() = jacobian_ * sensitivity;  // A W
-    growth_.noalias() = predictedSensitivity * parameterCovariance * predictedSensitivity.transpose();
-    growth_.noalias() -= carried_ * parameterCovariance * carried_.transpose();
+    added_ = extrapolation_ * effect_;             // B over the interval and its open-loop time
+    spreadAdded_.noalias() = added_ * parameterCovariance;
+    growth_.noalias() = carried_ * spreadAdded_.transpose();  // (A W) P_θ Bᵀ
+    growthTransposed_ = growth_.transpose();
+    growth_ += growthTransposed_;
+    growth_.noalias() += spreadAdded_ * added_.transpose();  // + B P_θ Bᵀ
     if (!allFinite(growth_)) return false;
     // A local: the solver's members are not initialised, and a filter copies none of its workspace
     // indeterminate.
-    const Eigen::SelfAdjointEigenSolver<StateMatrix> eigen((growth_ + growth_.transpose()) * Scalar(0.5));
+    const Eigen::SelfAdjointEigenSolver<StateMatrix> eigen(growth_);
     if (eigen.info() != Eigen::Success) return false;
     factor.noalias() = eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(Scalar(0)).cwiseSqrt().asDiagonal();
     return allFinite(factor);
@@ -159,8 +165,12 @@ class ParameterErrorCovariance {
   Joint transition_ = Joint::Zero(), spreadJoint_ = Joint::Zero(), corrected_ = Joint::Zero();
   Eigen::Matrix<Scalar, N + P, M> noiseMap_ = Eigen::Matrix<Scalar, N + P, M>::Zero();
   Eigen::Matrix<Scalar, N + P, M> noiseSpread_ = Eigen::Matrix<Scalar, N + P, M>::Zero();
-  StateByParam carried_ = StateByParam::Zero();  // A W
-  StateMatrix growth_ = StateMatrix::Zero();     // W⁻ P_θ W⁻ᵀ − (A W) P_θ (A W)ᵀ
+  Scalar extrapolation_ = 1;                         // of the last predict
+  StateByParam carried_ = StateByParam::Zero();      // A W
+  StateByParam added_ = StateByParam::Zero();        // B, extrapolated
+  StateByParam spreadAdded_ = StateByParam::Zero();  // B P_θ
+  StateMatrix growth_ = StateMatrix::Zero();         // W⁻ P_θ W⁻ᵀ − (A W) P_θ (A W)ᵀ
+  StateMatrix growthTransposed_ = StateMatrix::Zero();
 };
 
 }  // namespace mjukf::detail
