@@ -8,6 +8,7 @@
 #include <random>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <gtest/gtest.h>
 
@@ -154,6 +155,48 @@ TEST(LinearAlgebra, FinitenessChecks) {
   Eigen::Matrix<bool, 3, 1> present(true, false, true);
   EXPECT_TRUE(mjukf::detail::presentComponentsFinite(y, &present));  // the missing one is ignored
   EXPECT_FALSE(mjukf::detail::presentComponentsFinite(y, static_cast<const Eigen::Matrix<bool, 3, 1>*>(nullptr)));
+}
+
+// The PSD part of a symmetric matrix (the MJUKF's parameter noise, docs/algorithms.md §5.2) against
+// Eigen's eigensolver: A⁺ = V max(D, 0) Vᵀ. The map A → A⁺ is 1-Lipschitz in the Frobenius norm, so an
+// A⁺ computed from a backward-stable decomposition (Jacobi: V D Vᵀ = A + F, |F| ≤ c N ε |A|) is within
+// that of the true one; 8 N ε |A|_F bounds both computations' errors together.
+template <int N>
+void expectPositivePartMatchesEigen(std::mt19937_64& rng) {
+  using Matrix = Eigen::Matrix<double, N, N>;
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Matrix a;
+  for (int i = 0; i < N; ++i)
+    for (int j = 0; j < N; ++j) a(i, j) = normal(rng);
+  a = (a + a.transpose()).eval();  // indefinite, in general
+  Matrix e;
+  ASSERT_TRUE(mjukf::detail::positivePartFactor(a, e));
+  const Eigen::SelfAdjointEigenSolver<Matrix> reference(a);
+  const Matrix positive = reference.eigenvectors() * reference.eigenvalues().cwiseMax(0.0).asDiagonal() *
+                          reference.eigenvectors().transpose();
+  EXPECT_LT((e * e.transpose() - positive).norm(), 8 * N * kEps * a.norm()) << a;
+}
+
+TEST(LinearAlgebra, PositivePartFactorIsThePositiveSemiDefinitePart) {
+  std::mt19937_64 rng(11);
+  for (int trial = 0; trial < 50; ++trial) {
+    expectPositivePartMatchesEigen<1>(rng);
+    expectPositivePartMatchesEigen<2>(rng);
+    expectPositivePartMatchesEigen<3>(rng);
+    expectPositivePartMatchesEigen<4>(rng);
+    expectPositivePartMatchesEigen<6>(rng);
+  }
+  // Semi-definite: all of it; negative definite: none of it, exactly; not finite: refused.
+  std::mt19937_64 other(5);
+  const Eigen::Matrix4d covariance = mjukf::testing::randomCovariance<4>(other);
+  Eigen::Matrix4d e;
+  ASSERT_TRUE(mjukf::detail::positivePartFactor(covariance, e));
+  EXPECT_LT((e * e.transpose() - covariance).norm(), 32 * kEps * covariance.norm());
+  ASSERT_TRUE(mjukf::detail::positivePartFactor(Eigen::Matrix4d(-covariance), e));
+  EXPECT_TRUE((e.array() == 0).all()) << e;
+  Eigen::Matrix4d broken = covariance;
+  broken(1, 2) = broken(2, 1) = std::nan("");
+  EXPECT_FALSE(mjukf::detail::positivePartFactor(broken, e));
 }
 
 }  // namespace

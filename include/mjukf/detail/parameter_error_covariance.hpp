@@ -7,7 +7,6 @@
 /// K, its parameter gain G = diag(ξ) T, and the dynamics linearised from its sigma points.
 
 #include <Eigen/Core>
-#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
 #include "mjukf/detail/linear_algebra.hpp"
@@ -139,13 +138,7 @@ class ParameterErrorCovariance {
     growthTransposed_ = growth_.transpose();
     growth_ += growthTransposed_;
     growth_.noalias() += spreadAdded_ * added_.transpose();  // + B P_θ Bᵀ
-    if (!allFinite(growth_)) return false;
-    // A local: the solver's members are not initialised, and a filter copies none of its workspace
-    // indeterminate.
-    const Eigen::SelfAdjointEigenSolver<StateMatrix> eigen(growth_);
-    if (eigen.info() != Eigen::Success) return false;
-    factor.noalias() = eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(Scalar(0)).cwiseSqrt().asDiagonal();
-    return allFinite(factor);
+    return positivePartFactor(growth_, factor);
   }
 
   void commit() { joint_ = candidate_; }
