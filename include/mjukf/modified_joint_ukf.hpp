@@ -111,9 +111,9 @@ struct ModifiedJointUkfSettings : ParameterEstimationSettings<Scalar_, StateDim,
   /// evaluations of g. false: the paper's MJUKF and its cost (the paper presets), and
   /// `parameterCovariance()` is NaN, unknown.
   bool followParameterCovariance = true;
-  /// With `adaptiveScaling`: true (the default) adds to each time update's Q what the uncertainty of
-  /// θ̂ (`parameterCovariance()`) adds to the state's error over the interval, so that the state's
-  /// covariance, and with it the gain, accounts for the model's parameters being uncertain
+  /// With `adaptiveScaling`: true (the default) raises each time update's P⁻ to cover the covariance
+  /// of the state's error that the uncertainty of θ̂ (`parameterCovariance()`) implies, so that the
+  /// state's covariance, and with it the gain, accounts for the model's parameters being uncertain
   /// (docs/algorithms.md §5.2, docs/tuning-mjukf.md), and eases the parameters' steps in over a tenth
   /// of the memory. false: the state's covariance holds what its own sigma points and θᵢ carry alone,
   /// and the easing takes a fiftieth (the automatic MJUKF before this setting).
@@ -255,17 +255,17 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
                                                 refreshDue ? &sensitivity_.derivative() : nullptr,
                                                 sensitivity_.candidateStateSensitivity(), step.settings.processNoise,
                                                 refreshDue ? sensitivity_.extrapolation() : Scalar(1));
-    // The parameters' uncertainty in the state's covariance (docs/algorithms.md §5.2), at a refresh
-    // only: its extrapolation spans the time updates since the last one, so each interval counts once.
-    // A P_θ that is finite but huge is passed on as it is: the state's covariance then says so.
-    addsParameterNoise_ = refreshDue && found && step.settings.adaptiveScaling &&
-                          step.settings.parameterUncertaintyInState &&
-                          errorCovariance_.parameterNoiseFactor(before, parameterNoise_);
+    // The parameters' uncertainty in the state's covariance (docs/algorithms.md §5.2): P⁻ must cover
+    // the covariance of η + W⁻ e that P_θ's prediction implies. A Σ that is finite but huge is passed on
+    // as it is: the state's covariance then says so.
+    coversParameterError_ =
+        found && step.settings.adaptiveScaling && step.settings.parameterUncertaintyInState &&
+        errorCovariance_.stateErrorCovariance(sensitivity_.candidateStateSensitivity(), stateErrorCovariance_);
   }
-  // E of this time update (E Eᵀ added to its Q: the uncertainty of θ̂ in the state's), or null.
-  const typename Est::Matrix* addedProcessNoise() const {
+  // Σ = cov(η + W⁻ e) for this time update's P⁻ to cover (parameterUncertaintyInState), or null.
+  const typename Est::Matrix* priorCovarianceFloor() const {
     if constexpr (Automatic)
-      if (addsParameterNoise_) return &parameterNoise_;
+      if (coversParameterError_) return &stateErrorCovariance_;
     return nullptr;
   }
   template <class Step>
@@ -326,7 +326,7 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
     }
     candidateParameters_ = candidateParameterPoints_.rowwise().sum() / Scalar(Count);  // eq. 10
     if (!allFinite(candidateParameterPoints_) || !allFinite(candidateParameters_)) return Status::NonFiniteResult;
-    // P_θ never refuses a step: an unbounded P_θ is reported (and passed on to the state's Q, §5.2).
+    // P_θ never refuses a step: an unbounded P_θ is reported (and passed on to the floor of P⁻, §5.2).
     if constexpr (Automatic)
       if (followsSensitivities_) correctErrorCovariance(c);
     return Status::Ok;
@@ -413,9 +413,9 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<Points, 6> priorPoints_{Points::Zero()};
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<MeasurementByState, 7> measurementJacobian_{MeasurementByState::Zero()};
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<MeasurementByState, 8> stateGainTransposed_{MeasurementByState::Zero()};
-  // E of the time update in progress (parameterUncertaintyInState), and whether it applies.
-  MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<typename Est::Matrix, 9> parameterNoise_{Est::Matrix::Zero()};
-  MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<bool, 10> addsParameterNoise_{false};
+  // Σ of the time update in progress (parameterUncertaintyInState), and whether it applies.
+  MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<typename Est::Matrix, 9> stateErrorCovariance_{Est::Matrix::Zero()};
+  MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<bool, 10> coversParameterError_{false};
   // The automatic modes' state (committed with the parameters).
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<Sensitivity, 1> sensitivity_;
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<long, 2> timeUpdates_{0};

@@ -36,7 +36,7 @@ struct Policy : mjukf::detail::ParameterPolicy<Plant, Integrator, Settings, Est>
     for (int i = 0; i < Est::Count; ++i) points.col(i) = step.propagate(theta, points.col(i));
   }
 #endif
-  const Est::Matrix* addedProcessNoise() const { return nullptr; }
+  const Est::Matrix* priorCovarianceFloor() const { return nullptr; }
   template <class Step>
   Est::Vector propagateMean(const Step& step, const Est::Vector& mean) {
     return step.propagate(theta, mean);

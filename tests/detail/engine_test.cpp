@@ -15,9 +15,11 @@
 #include <utility>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <gtest/gtest.h>
 
+#include "mjukf/detail/parameter_error_covariance.hpp"
 #include "mjukf/detail/unscented_engine.hpp"
 #include "test_support.hpp"
 
@@ -76,6 +78,82 @@ TYPED_TEST(EngineEstimate, PredictionOfALinearMapIsTheKalmanPrediction) {
   e.commitPrediction();
   EXPECT_EQ(e.mean(), e.candidateMean());
   EXPECT_TRUE(e.hasPoints());
+}
+
+// A policy's floor (the MJUKF's covariance of η + W e, docs/algorithms.md §5.2): P⁻ is raised to cover
+// it by the positive semi-definite part of floor − P⁻, so P⁻ is unchanged where it already covers the
+// floor, becomes P⁻ + v vᵀ for a floor P⁻ + v vᵀ, and in general covers both and no more: with
+// D = floor − P⁻, P − P⁻ = D⁺ and P − floor = (−D)⁺, whose product is zero (their eigenspaces are
+// orthogonal). Tolerances: the rounding of the prediction and the Jacobi rotations (1-Lipschitz:
+// backward errors of c L ε ‖·‖_F), and in the square-root form of two triangularisations and S Sᵀ;
+// c = 64 covers them with room, on matrices whose norm is taken in each comparison.
+TYPED_TEST(EngineEstimate, AFloorRaisesThePredictionToCoverItAndNoMore) {
+  LinearCase c;
+  using Est = typename TestFixture::Est;
+  const auto predictWith = [&c](const Eigen::Matrix3d* floor) {
+    Est e = TestFixture::makeEstimate(c);
+    EXPECT_EQ(e.draw(e.mean(), e.factor()), Status::Ok);
+    for (int i = 0; i < Est::Count; ++i) e.workPoints().col(i) = c.F * e.workPoints().col(i);
+    e.predict(c.Q, floor);
+    EXPECT_EQ(e.settle(mjukf::CovarianceRepair<double>{}), Status::Ok);
+    return e;
+  };
+  const double eps = std::numeric_limits<double>::epsilon();
+  const Eigen::Matrix3d prior = c.F * c.P * c.F.transpose() + c.Q;
+  const auto tolerance = [&](const Eigen::Matrix3d& floor) { return 64 * 3 * eps * (prior.norm() + floor.norm()); };
+  const auto smallestEigenvalue = [](const Eigen::Matrix3d& m) {
+    return Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(m).eigenvalues().minCoeff();
+  };
+
+  const Eigen::Matrix3d below = prior * 0.5;  // covered already: nothing added
+  EXPECT_LT((predictWith(&below).candidateCovariance() - prior).cwiseAbs().maxCoeff(), tolerance(below));
+
+  const Eigen::Vector3d v(0.3, -0.2, 0.5);
+  const Eigen::Matrix3d rankOne = prior + v * v.transpose();  // short by v vᵀ: exactly that is added
+  EXPECT_LT((predictWith(&rankOne).candidateCovariance() - rankOne).cwiseAbs().maxCoeff(), tolerance(rankOne));
+
+  std::mt19937_64 rng(5);
+  int mixed = 0;
+  for (int trial = 0; trial < 20; ++trial) {  // D of both signs: the result covers both, and no more
+    const Eigen::Matrix3d floor = mjukf::testing::randomCovariance<3>(rng, 0.3 * prior.norm());
+    const Eigen::Vector3d inertia = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(floor - prior).eigenvalues();
+    mixed += inertia.minCoeff() < 0 && inertia.maxCoeff() > 0;
+    const Eigen::Matrix3d p = predictWith(&floor).candidateCovariance();
+    const double tol = tolerance(floor);
+    EXPECT_GE(smallestEigenvalue(p - floor), -tol) << "trial " << trial;
+    EXPECT_GE(smallestEigenvalue(p - prior), -tol) << "trial " << trial;
+    EXPECT_LT(((p - prior) * (p - floor)).norm(), tol * (prior.norm() + floor.norm())) << "trial " << trial;
+  }
+  EXPECT_GE(mixed, 10) << "too few floors neither below nor above the prediction to test the general case";
+}
+
+// The floor the MJUKF gives (detail/parameter_error_covariance.hpp): cov(η + W e) = [I W] J [I W]ᵀ for the
+// joint covariance J of (η, e), here a general one (cross-covariances from a measurement update of
+// random gains), symmetric to the last bit. Tolerance: sums of n + p products of entries of size 1.
+TEST(ParameterErrorCovariance, TheStateErrorCovarianceIsThatOfEtaPlusWe) {
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> normal;
+  const auto random = [&](auto m) {
+    for (int i = 0; i < m.rows(); ++i)
+      for (int j = 0; j < m.cols(); ++j) m(i, j) = normal(rng);
+    return m;
+  };
+  mjukf::detail::ParameterErrorCovariance<double, 3, 2, 2> covariance;
+  covariance.start(mjukf::testing::randomCovariance<3>(rng), mjukf::testing::randomCovariance<2>(rng));
+  ASSERT_TRUE(covariance.correct(random(Eigen::Matrix<double, 2, 3>()), random(Eigen::Matrix<double, 3, 2>()),
+                                 random(Eigen::Matrix2d()), random(Eigen::Matrix2d()),
+                                 random(Eigen::Matrix<double, 3, 2>()), Eigen::Matrix2d::Identity()));
+  covariance.commit();  // the candidate becomes committed(), which the test can read
+  const Eigen::Matrix<double, 5, 5> joint = covariance.committed();
+  ASSERT_GT((joint.topRightCorner<3, 2>().cwiseAbs().maxCoeff()), 0.1) << "a J with cross-covariances";
+  const Eigen::Matrix<double, 3, 2> w = random(Eigen::Matrix<double, 3, 2>());
+  Eigen::Matrix<double, 3, 5> map;
+  map << Eigen::Matrix3d::Identity(), w;
+  Eigen::Matrix3d sigma;
+  ASSERT_TRUE(covariance.stateErrorCovariance(w, sigma));
+  const Eigen::Matrix3d expected = map * joint * map.transpose();
+  EXPECT_LT((sigma - expected).cwiseAbs().maxCoeff(), 64 * std::numeric_limits<double>::epsilon() * expected.norm());
+  EXPECT_TRUE(sigma == sigma.transpose());
 }
 
 TYPED_TEST(EngineEstimate, CorrectionOfALinearMeasurementIsTheKalmanUpdate) {

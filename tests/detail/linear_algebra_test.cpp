@@ -157,7 +157,7 @@ TEST(LinearAlgebra, FinitenessChecks) {
   EXPECT_FALSE(mjukf::detail::presentComponentsFinite(y, static_cast<const Eigen::Matrix<bool, 3, 1>*>(nullptr)));
 }
 
-// The PSD part of a symmetric matrix (the MJUKF's parameter noise, docs/algorithms.md §5.2) against
+// The PSD part of a symmetric matrix (the MJUKF's floor of P⁻, docs/algorithms.md §5.2) against
 // Eigen's eigensolver: A⁺ = V max(D, 0) Vᵀ. The map A → A⁺ is 1-Lipschitz in the Frobenius norm, so an
 // A⁺ computed from a backward-stable decomposition (Jacobi: V D Vᵀ = A + F, |F| ≤ c N ε |A|) is within
 // that of the true one; 8 N ε |A|_F bounds both computations' errors together.
@@ -197,6 +197,18 @@ TEST(LinearAlgebra, PositivePartFactorIsThePositiveSemiDefinitePart) {
   Eigen::Matrix4d broken = covariance;
   broken(1, 2) = broken(2, 1) = std::nan("");
   EXPECT_FALSE(mjukf::detail::positivePartFactor(broken, e));
+  // Scaled by an even power of two inside: bit for bit the same result for A and 4ᵏ A scaled back, and
+  // a finite A near the overflow threshold (|A|²_F = inf) is decomposed, not left at its diagonal:
+  // [[1, 2], [2, 1]] has the eigenvalues 3 and −1, so its positive part is 1.5 everywhere.
+  const Eigen::Matrix4d indefinite = covariance - 2 * mjukf::testing::randomCovariance<4>(other);
+  Eigen::Matrix4d scaled;
+  ASSERT_TRUE(mjukf::detail::positivePartFactor(indefinite, e));
+  ASSERT_TRUE(mjukf::detail::positivePartFactor(Eigen::Matrix4d(indefinite * 0x1p40), scaled));
+  EXPECT_TRUE((scaled * 0x1p-20 == e)) << "scaling by 4^20 changed the rounding";
+  const Eigen::Matrix2d huge = (Eigen::Matrix2d() << 1, 2, 2, 1).finished() * 1e300;
+  Eigen::Matrix2d hugeFactor;
+  ASSERT_TRUE(mjukf::detail::positivePartFactor(huge, hugeFactor));
+  EXPECT_LT(((hugeFactor * hugeFactor.transpose()) / 1e300 - Eigen::Matrix2d::Constant(1.5)).norm(), 32 * kEps);
 }
 
 }  // namespace

@@ -5,7 +5,7 @@
 // unscented transform, docs/algorithms.md §1–3), the symmetric sigma-point draw, and the square-root
 // factors of the square-root form (docs/algorithms.md §10: Householder factors of B Bᵀ and AᵀA, rank-one
 // updates and downdates of a Cholesky factor, a square root of a semi-definite matrix), and the positive
-// semi-definite part of a symmetric matrix (the MJUKF's parameter noise, §5.2). Every function
+// semi-definite part of a symmetric matrix (the MJUKF's floor of P⁻, §5.2). Every function
 // takes fixed-size Eigen matrices, writes into its arguments and allocates nothing; each is written out
 // where Eigen's general path costs more than the arithmetic at these sizes (said at each).
 
@@ -662,12 +662,17 @@ Eigen::Matrix<Scalar, N, N> psdSquareRoot(const Eigen::Matrix<Scalar, N, N>& q) 
 // n = 4 1.6 µs against 1.4, n = 6 4.9 against 2.7). Each sweep rotates every off-diagonal pair to zero;
 // the loop stops when the off-diagonal mass is below ε² of A's (or after 32 sweeps, which no finite A
 // has needed). Reads the whole of A (symmetric as given). Returns false, E then unspecified, when A is
-// not finite.
+// not finite. It works on A scaled by an even power of two, 4⁻ᵏ A with largest entry in [1/4, 1): exact,
+// so the result is the unscaled computation's bit for bit, but a finite A of entries near the overflow
+// threshold (a P_θ that has grown without bound) no longer overflows the stopping test's |A|²_F.
 template <class Scalar, int N>
 bool positivePartFactor(const Eigen::Matrix<Scalar, N, N>& a, Eigen::Matrix<Scalar, N, N>& factor) {
   using Matrix = Eigen::Matrix<Scalar, N, N>;
   if (!allFinite(a)) return false;
-  Matrix d = a;
+  int exponent = 0;
+  std::frexp(a.cwiseAbs().maxCoeff(), &exponent);  // largest = f 2^exponent, f ∈ [1/2, 1)
+  exponent += exponent & 1;                        // even: √ of the scale is exact
+  Matrix d = a * std::ldexp(Scalar(1), -exponent);
   Matrix v = Matrix::Identity();
   const Scalar scale = d.squaredNorm();
   const Scalar epsilon = std::numeric_limits<Scalar>::epsilon();
@@ -685,7 +690,8 @@ bool positivePartFactor(const Eigen::Matrix<Scalar, N, N>& a, Eigen::Matrix<Scal
         v.applyOnTheRight(p, q, rotation);
       }
   }
-  for (int j = 0; j < N; ++j) factor.col(j) = v.col(j) * std::sqrt(std::max(d(j, j), Scalar(0)));
+  const Scalar root = std::ldexp(Scalar(1), exponent / 2);
+  for (int j = 0; j < N; ++j) factor.col(j) = v.col(j) * (std::sqrt(std::max(d(j, j), Scalar(0))) * root);
   return allFinite(factor);
 }
 

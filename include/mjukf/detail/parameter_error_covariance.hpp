@@ -77,7 +77,6 @@ class ParameterErrorCovariance {
     if (derivative && found) effect_ = *derivative - jacobian_ * sensitivity;  // B
     // Over the open-loop time too: A ← I + x (A − I), B ← x B.
     jacobian_ = StateMatrix::Identity() + extrapolation * (jacobian_ - StateMatrix::Identity());
-    extrapolation_ = extrapolation;
     transition_.setIdentity();
     transition_.template topLeftCorner<N, N>() = jacobian_;
     StateByParam drift = extrapolation * effect_ - predictedSensitivity;
@@ -119,26 +118,19 @@ class ParameterErrorCovariance {
     return allFinite(candidate_);
   }
 
-  /// What the uncertainty of θ̂ adds to the state's error over the last `predict` (docs/algorithms.md
-  /// §5.2): the state's error is η + W e, whose W e part the time update carries to A W e where it is
-  /// W⁻ e = (A W + B) e, so that W⁻ P_θ W⁻ᵀ − (A W) P_θ (A W)ᵀ is missing from a covariance propagated
-  /// by A alone. It is formed as (A W) P_θ Bᵀ + B P_θ (A W)ᵀ + B P_θ Bᵀ, never as the difference, which
-  /// cancels: with millisecond steps B is a thousandth of W, and the difference's rounding made the
-  /// automatic MJUKF's result depend on the compiler's (tests/flags/). A and B are the last `predict`'s,
-  /// extrapolated over its open-loop time, for a `predict` that refreshed the sensitivities and found A
-  /// (between refreshes B would be stale). Its positive semi-definite part E Eᵀ (the parts where the
-  /// parameters' effect shrinks are dropped: conservative) into `factor` = E, from the committed P_θ and
-  /// `sensitivity`, W before the update. False (E unspecified) when a result is not finite.
-  bool parameterNoiseFactor(const StateByParam& sensitivity, StateMatrix& factor) {
-    const ParamMatrix parameterCovariance = joint_.template bottomRightCorner<P, P>();
-    carried_.noalias() = jacobian_ * sensitivity;  // A W
-    added_ = extrapolation_ * effect_;             // B over the interval and its open-loop time
-    spreadAdded_.noalias() = added_ * parameterCovariance;
-    growth_.noalias() = carried_ * spreadAdded_.transpose();  // (A W) P_θ Bᵀ
-    growthTransposed_ = growth_.transpose();
-    growth_ += growthTransposed_;
-    growth_.noalias() += spreadAdded_ * added_.transpose();  // + B P_θ Bᵀ
-    return positivePartFactor(growth_, factor);
+  /// The covariance of the state's error that the candidate implies (docs/algorithms.md §5.2): the
+  /// state's error is η + W e, so cov = J_ηη + W J_eη + J_ηe Wᵀ + W P_θ Wᵀ with J the candidate
+  /// cov((η, e)) and W = `sensitivity` (W⁻ after a `predict`). Into `covariance`, exactly symmetric;
+  /// false when it is not finite.
+  bool stateErrorCovariance(const StateByParam& sensitivity, StateMatrix& covariance) {
+    carried_.noalias() = sensitivity * candidate_.template bottomRightCorner<P, P>();  // W P_θ
+    carried_ += candidate_.template topRightCorner<N, P>();                            // + J_ηe: cov(x̃, e)
+    covariance.noalias() = sensitivity * carried_.transpose();                         // W cov(e, x̃)
+    covariance.noalias() += candidate_.template topRightCorner<N, P>() * sensitivity.transpose();  // J_ηe Wᵀ
+    covariance += candidate_.template topLeftCorner<N, N>();                                       // + J_ηη
+    transposed_ = covariance.transpose();
+    covariance = (covariance + transposed_) * Scalar(0.5);
+    return allFinite(covariance);
   }
 
   void commit() { joint_ = candidate_; }
@@ -158,12 +150,8 @@ class ParameterErrorCovariance {
   Joint transition_ = Joint::Zero(), spreadJoint_ = Joint::Zero(), corrected_ = Joint::Zero();
   Eigen::Matrix<Scalar, N + P, M> noiseMap_ = Eigen::Matrix<Scalar, N + P, M>::Zero();
   Eigen::Matrix<Scalar, N + P, M> noiseSpread_ = Eigen::Matrix<Scalar, N + P, M>::Zero();
-  Scalar extrapolation_ = 1;                         // of the last predict
-  StateByParam carried_ = StateByParam::Zero();      // A W
-  StateByParam added_ = StateByParam::Zero();        // B, extrapolated
-  StateByParam spreadAdded_ = StateByParam::Zero();  // B P_θ
-  StateMatrix growth_ = StateMatrix::Zero();         // W⁻ P_θ W⁻ᵀ − (A W) P_θ (A W)ᵀ
-  StateMatrix growthTransposed_ = StateMatrix::Zero();
+  StateByParam carried_ = StateByParam::Zero();  // cov(x̃, e) = J_ηe + W P_θ
+  StateMatrix transposed_ = StateMatrix::Zero();
 };
 
 }  // namespace mjukf::detail

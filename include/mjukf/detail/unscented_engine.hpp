@@ -375,28 +375,25 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
     return Status::Ok;
   }
 
-  /// §2: x̂⁻ = Σ Wmᵢ χᵢ⁺, P⁻ = Σ Wcᵢ (χᵢ⁺ − x̂⁻)(χᵢ⁺ − x̂⁻)ᵀ + Q (+ E Eᵀ) from the propagated workPoints(),
-  /// into candidateMean() and candidateCovariance(); E (`addedNoiseFactor`, may be null) is noise a
-  /// policy adds for this step alone (the MJUKF's parameter uncertainty). Square-root form (§10): S⁻
-  /// from [√Wcᵢ (χᵢ⁺ − x̂⁻) for Wcᵢ ≥ 0 | G] by Householder, or [… | G | E] when E is given (and the
-  /// prior's points then count as Other: the posterior is a downdate of S⁻, which needs no G), then a
-  /// rank-one downdate by √|Wcᵢ| (χᵢ⁺ − x̂⁻) for each Wcᵢ < 0; when either fails, the full form's P⁻
-  /// for settle() to check and repair.
-  void predict(const Matrix& processNoise, const Matrix* addedNoiseFactor = nullptr) {
+  /// §2: x̂⁻ = Σ Wmᵢ χᵢ⁺, P⁻ = Σ Wcᵢ (χᵢ⁺ − x̂⁻)(χᵢ⁺ − x̂⁻)ᵀ + Q from the propagated workPoints(), into
+  /// candidateMean() and candidateCovariance(). `floor` (may be null) is a covariance a policy knows the
+  /// prior's error to have (the MJUKF's, with the parameters' uncertainty, docs/algorithms.md §5.2):
+  /// P⁻ is raised to cover it, P⁻ += E Eᵀ with E Eᵀ the positive semi-definite part of floor − P⁻, so
+  /// that P⁻ ⪰ floor and P⁻ is unchanged where it already covers it. E enters P⁻ as Q does: the
+  /// measurement update's P_xy and P_yy still come from the propagated points (unless
+  /// redrawPointsForUpdate). Square-root form (§10): S⁻ from [√Wcᵢ (χᵢ⁺ − x̂⁻) for Wcᵢ ≥ 0 | G] by
+  /// Householder, then a rank-one downdate by √|Wcᵢ| (χᵢ⁺ − x̂⁻) for each Wcᵢ < 0, then with a floor S⁻
+  /// from [S⁻ | E] (and the prior's points count as Other: the posterior is a downdate of S⁻); when a
+  /// factor fails, the full form's P⁻ for settle() to check and repair.
+  void predict(const Matrix& processNoise, const Matrix* floor = nullptr) {
     weightedMean(workPoints_, sigmaPoints_.meanWeights(), candidateMean_);
     deviations_.noalias() = workPoints_.colwise() - candidateMean_;
     if constexpr (SquareRoot) {
       sr().predictedMean = candidateMean_;
-      bool factored;
-      if (addedNoiseFactor) {
-        sr().workPrior = PriorPoints::Other;
-        factored = factorWithAddedNoise(*addedNoiseFactor);
-      } else {
-        sr().workPrior = PriorPoints::Predicted;
-        sr().predictionStack.template rightCols<L>() = sr().processNoiseRoot;
-        factored = weightedFactor(deviations_, sr().predictionStack, sr().candidateFactor);
-      }
-      if (factored) {
+      sr().workPrior = floor ? PriorPoints::Other : PriorPoints::Predicted;
+      sr().predictionStack.template rightCols<L>() = sr().processNoiseRoot;
+      if (weightedFactor(deviations_, sr().predictionStack, sr().candidateFactor) &&
+          (!floor || raiseFactorToFloor(*floor))) {
         sr().candidate = SquareRootPart_::Candidate::Factor;
         return;
       }
@@ -404,19 +401,33 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
     }
     weightedCovariance(deviations_, sigmaPoints_.covarianceWeights(), candidateCovariance_);
     candidateCovariance_ += processNoise;
-    if (addedNoiseFactor) candidateCovariance_.noalias() += *addedNoiseFactor * addedNoiseFactor->transpose();
+    if (floor) raiseToFloor(*floor, candidateCovariance_);
   }
 
-  /// S⁻ from [√Wcᵢ Δχᵢ | G | E] into the candidate factor (predict() with E): one triangularisation, so
-  /// that neither G Gᵀ + E Eᵀ nor E Eᵀ needs to be definite. The stack is a local of a function of its
-  /// own, so that the filters that never add noise do not carry it in their frame.
+  /// P += E Eᵀ, E Eᵀ the positive semi-definite part of floor − P (1-Lipschitz in both: the rounding of
+  /// the difference is not amplified). A non-finite difference leaves P as it is, for settle() to judge.
+  static void raiseToFloor(const Matrix& floor, Matrix& covariance) {
+    Matrix shortfall = floor - covariance, transposed = shortfall.transpose();
+    shortfall = (shortfall + transposed) * Scalar(0.5);
+    Matrix added;
+    if (positivePartFactor(shortfall, added)) covariance.noalias() += added * added.transpose();
+  }
+  /// The square-root form's raiseToFloor: P⁻ = S⁻ S⁻ᵀ raised as above, then S⁻ from [S⁻ | E] by one
+  /// triangularisation. In a function of its own, so that the filters without a floor do not carry its
+  /// stack in their frame.
   template <class F = Form>
-  MJUKF_NOINLINE bool factorWithAddedNoise(const Matrix& added) {
+  MJUKF_NOINLINE bool raiseFactorToFloor(const Matrix& floor) {
     static_assert(isSquareRootForm<F>);
-    Eigen::Matrix<Scalar, L, Count + 2 * L> stack;  // its first Count columns are weightedFactor's
-    stack.template middleCols<L>(Count) = sr().processNoiseRoot;
+    Matrix covariance, shortfall, transposed, added;
+    outerOfLower(sr().candidateFactor, covariance);
+    shortfall = floor - covariance;
+    transposed = shortfall.transpose();
+    shortfall = (shortfall + transposed) * Scalar(0.5);
+    if (!positivePartFactor(shortfall, added)) return false;
+    Eigen::Matrix<Scalar, L, 2 * L> stack;
+    stack.template leftCols<L>() = sr().candidateFactor;
     stack.template rightCols<L>() = added;
-    return weightedFactor(deviations_, stack, sr().candidateFactor);
+    return lowerFactorOfOuter(stack, sr().candidateFactor);
   }
 
   /// The dual filter's parameter time update (docs/algorithms.md §9), a random walk with forgetting:
@@ -752,7 +763,7 @@ struct Correction {
 //
 //   template <class Step> Status predictParameters(const Step&, const Est& state);   before the state's points
 //   template <class Step> void propagatePoints(const Step&, Points& points);          χᵢ⁺ = Φ(χᵢ), in place
-//   const Matrix* addedProcessNoise() const;          E, added to this time update's P⁻ as E Eᵀ, or null
+//   const Matrix* priorCovarianceFloor() const;       a covariance this time update's P⁻ must cover, or null
 //   template <class Step> Vector propagateMean(const Step&, const Vector& mean);      the open-loop mean
 //   void measurePoints(const Model&, const Input& u, const Points& points, MeasPoints& measured);
 //                                                    Yᵢ = g(χᵢ, u)
@@ -775,8 +786,8 @@ MJUKF_POLICY_HAS(predictParameters,
 MJUKF_POLICY_HAS(propagatePoints,
                  std::declval<P&>().propagatePoints(std::declval<const typename P::CheckStep&>(),
                                                     std::declval<typename P::CheckEstimate::Points&>()))
-MJUKF_POLICY_HAS(addedProcessNoise,
-                 static_cast<const typename P::CheckEstimate::Matrix*>(std::declval<const P&>().addedProcessNoise()))
+MJUKF_POLICY_HAS(priorCovarianceFloor,
+                 static_cast<const typename P::CheckEstimate::Matrix*>(std::declval<const P&>().priorCovarianceFloor()))
 MJUKF_POLICY_HAS(propagateMean,
                  std::declval<P&>().propagateMean(std::declval<const typename P::CheckStep&>(),
                                                   std::declval<const typename P::CheckEstimate::Vector&>()))
@@ -802,8 +813,8 @@ constexpr bool checkParameterPolicy() {
                 "parameter policy: missing member predictParameters(const Step&, const Estimate&) -> Status");
   static_assert(PolicyHas_propagatePoints<Policy>::value,
                 "parameter policy: missing member propagatePoints(const Step&, Points&)");
-  static_assert(PolicyHas_addedProcessNoise<Policy>::value,
-                "parameter policy: missing member addedProcessNoise() const -> const Matrix* (null: none)");
+  static_assert(PolicyHas_priorCovarianceFloor<Policy>::value,
+                "parameter policy: missing member priorCovarianceFloor() const -> const Matrix* (null: none)");
   static_assert(PolicyHas_propagateMean<Policy>::value,
                 "parameter policy: missing member propagateMean(const Step&, const Vector&) -> Vector");
   static_assert(
@@ -1252,7 +1263,7 @@ class UnscentedEngine {
     if (const Status s = estimate_.draw(mean, lowerFactor); s != Status::Ok) return s;
     policy_.propagatePoints(step, estimate_.workPoints());
     if (!allFinite(estimate_.workPoints())) return Status::NonFiniteResult;
-    estimate_.predict(settings_.processNoise, policy_.addedProcessNoise());
+    estimate_.predict(settings_.processNoise, policy_.priorCovarianceFloor());
     if (!allFinite(estimate_.candidateMean())) return Status::NonFiniteResult;
     return estimate_.settle(settings_.repair);
   }
