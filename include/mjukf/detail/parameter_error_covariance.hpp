@@ -128,8 +128,7 @@ class ParameterErrorCovariance {
     covariance.noalias() = sensitivity * carried_.transpose();                         // W cov(e, x̃)
     covariance.noalias() += candidate_.template topRightCorner<N, P>() * sensitivity.transpose();  // J_ηe Wᵀ
     covariance += candidate_.template topLeftCorner<N, N>();                                       // + J_ηη
-    transposed_ = covariance.transpose();
-    covariance = (covariance + transposed_) * Scalar(0.5);
+    symmetrize(covariance);
     return allFinite(covariance);
   }
 
@@ -151,7 +150,6 @@ class ParameterErrorCovariance {
   Eigen::Matrix<Scalar, N + P, M> noiseMap_ = Eigen::Matrix<Scalar, N + P, M>::Zero();
   Eigen::Matrix<Scalar, N + P, M> noiseSpread_ = Eigen::Matrix<Scalar, N + P, M>::Zero();
   StateByParam carried_ = StateByParam::Zero();  // cov(x̃, e) = J_ηe + W P_θ
-  StateMatrix transposed_ = StateMatrix::Zero();
 };
 
 }  // namespace mjukf::detail

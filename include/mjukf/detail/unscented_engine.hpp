@@ -404,26 +404,27 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
     if (floor) raiseToFloor(*floor, candidateCovariance_);
   }
 
-  /// P += E Eᵀ, E Eᵀ the positive semi-definite part of floor − P (1-Lipschitz in both: the rounding of
-  /// the difference is not amplified). A non-finite difference leaves P as it is, for settle() to judge.
-  static void raiseToFloor(const Matrix& floor, Matrix& covariance) {
-    Matrix shortfall = floor - covariance, transposed = shortfall.transpose();
-    shortfall = (shortfall + transposed) * Scalar(0.5);
-    Matrix added;
-    if (positivePartFactor(shortfall, added)) covariance.noalias() += added * added.transpose();
+  /// E with E Eᵀ the positive semi-definite part of floor − P (1-Lipschitz in both: the rounding of the
+  /// difference is not amplified); false when the difference is not finite.
+  static bool shortfallFactor(const Matrix& floor, const Matrix& covariance, Matrix& added) {
+    Matrix shortfall = floor - covariance;
+    symmetrize(shortfall);
+    return positivePartFactor(shortfall, added);
   }
-  /// The square-root form's raiseToFloor: P⁻ = S⁻ S⁻ᵀ raised as above, then S⁻ from [S⁻ | E] by one
+  /// P += E Eᵀ (shortfallFactor). A non-finite difference leaves P as it is, for settle() to judge.
+  static void raiseToFloor(const Matrix& floor, Matrix& covariance) {
+    Matrix added;
+    if (shortfallFactor(floor, covariance, added)) covariance.noalias() += added * added.transpose();
+  }
+  /// The square-root form's raiseToFloor: E from P⁻ = S⁻ S⁻ᵀ, then S⁻ from [S⁻ | E] by one
   /// triangularisation. In a function of its own, so that the filters without a floor do not carry its
   /// stack in their frame.
   template <class F = Form>
   MJUKF_NOINLINE bool raiseFactorToFloor(const Matrix& floor) {
     static_assert(isSquareRootForm<F>);
-    Matrix covariance, shortfall, transposed, added;
+    Matrix covariance, added;
     outerOfLower(sr().candidateFactor, covariance);
-    shortfall = floor - covariance;
-    transposed = shortfall.transpose();
-    shortfall = (shortfall + transposed) * Scalar(0.5);
-    if (!positivePartFactor(shortfall, added)) return false;
+    if (!shortfallFactor(floor, covariance, added)) return false;
     Eigen::Matrix<Scalar, L, 2 * L> stack;
     stack.template leftCols<L>() = sr().candidateFactor;
     stack.template rightCols<L>() = added;
