@@ -3,7 +3,8 @@
 /// \file
 /// What the MJUKF's automatic modes know about the parameters (docs/tuning-mjukf.md): the sensitivity
 /// of the state estimate and of the predicted measurement to θ̂ through the dynamics and the filter,
-/// the information gathered about θ, and from them T (eqs. 14–15) and a per-parameter ξ (eq. 9).
+/// the information gathered about θ, and from them T (eqs. 14–15), the least-squares gain of θ, and a
+/// per-parameter ξ (eq. 9) fitted to a gain.
 
 #include <cmath>
 #include <limits>
@@ -243,23 +244,29 @@ class ParameterSensitivity {
     }
   }
 
-  /// The adaptive ξ (docs/tuning-mjukf.md): the recursive least-squares gain G = w I⁻¹ ψᵀ P_yy⁻¹ (p × m)
-  /// of the candidate information, and ξᵣ the least-squares fit of −ξᵣ Tᵣ to its row Gᵣ, so that eq. 9
-  /// with T moves θᵣ as G would, as far as T's row allows. ξᵣ = 0 for a zero row of T.
-  void scaling(const Transformation& t, const MeasMatrix& innovationFactor, Param& xi) {
+  /// The recursive least-squares gain K = I⁻¹ ψᵀ P_yy⁻¹ (p × m) of the candidate information, with
+  /// `innovationFactor` the lower Cholesky factor of P_yy (`ParameterGain::RecursiveLeastSquares`,
+  /// docs/tuning-mjukf.md). Zero when I has no Cholesky factor.
+  void leastSquaresGain(const MeasMatrix& innovationFactor, Transformation& gain) const {
     MeasSensitivity solved = whitened_;
     detail::solveUpperInPlace(innovationFactor, solved);  // P_yy⁻¹ ψ = S⁻ᵀ (S⁻¹ ψ)
-    gain_ = solved.transpose();
+    gain = solved.transpose();
     Information informationFactor;
     if (!detail::choleskyLower(candidateInformation_, informationFactor)) {
-      xi.setZero();
+      gain.setZero();
       return;
     }
-    detail::solveLowerInPlace(informationFactor, gain_);
-    detail::solveUpperInPlace(informationFactor, gain_);
+    detail::solveLowerInPlace(informationFactor, gain);
+    detail::solveUpperInPlace(informationFactor, gain);
+  }
+
+  /// The adaptive ξ (docs/tuning-mjukf.md) from a gain K of θ (p × m, θ̂ += K ν): ξᵣ the least-squares
+  /// fit of −ξᵣ Tᵣ to the row w Kᵣ, w the easing's weight, so that eq. 9 with T moves θᵣ as w K would, as
+  /// far as T's row allows. ξᵣ = 0 for a zero row of T.
+  void scaling(const Transformation& t, const Transformation& gain, Param& xi) const {
     for (int r = 0; r < P; ++r) {
       const Scalar norm = t.row(r).squaredNorm();
-      xi(r) = norm > Scalar(0) ? -weight_ * gain_.row(r).dot(t.row(r)) / norm : Scalar(0);
+      xi(r) = norm > Scalar(0) ? -weight_ * gain.row(r).dot(t.row(r)) / norm : Scalar(0);
     }
   }
 
@@ -270,6 +277,10 @@ class ParameterSensitivity {
   /// that error from moving θ̂ early (docs/tuning-mjukf.md). The information is not weighed: it only says
   /// how much is known, and a weight on it would cancel in the step once the data outweigh the prior.
   Scalar weight() const { return weight_; }
+  /// λ of the memory for the update in progress, max(exp(−Δt / memory), exp(−1 / minimumUpdates)).
+  Scalar forgetting() const { return forgetting_; }
+  /// The memory in measurement updates, −1 / ln λ (infinite for λ = 1).
+  Scalar memoryUpdates() const { return memoryUpdates_; }
 
   /// ψ of the measurement update in progress (after `correct`, before `commitCorrection`).
   const MeasSensitivity& candidateMeasurementSensitivity() const { return candidateMeasurement_; }
@@ -321,7 +332,6 @@ class ParameterSensitivity {
   // Workspace, zeroed once so that copying an object (a filter is built from a copy of its policy)
   // copies no indeterminate values.
   MeasSensitivity whitened_ = MeasSensitivity::Zero();
-  Transformation gain_ = Transformation::Zero();
 };
 
 }  // namespace mjukf

@@ -7,6 +7,7 @@
 // answer). Tolerances: rounding of sums of 2L + 1 terms of size ‖P‖, a few hundred ε. And the shared
 // input of a time update: every request answered with input(t) itself, input(t) evaluated once per time.
 
+#include <cmath>
 #include <limits>
 #include <random>
 #include <set>
@@ -19,6 +20,7 @@
 #include <Eigen/LU>
 #include <gtest/gtest.h>
 
+#include "mjukf/detail/parameter_change_detector.hpp"
 #include "mjukf/detail/parameter_error_covariance.hpp"
 #include "mjukf/detail/unscented_engine.hpp"
 #include "test_support.hpp"
@@ -142,7 +144,7 @@ TEST(ParameterErrorCovariance, TheStateErrorCovarianceIsThatOfEtaPlusWe) {
   covariance.start(mjukf::testing::randomCovariance<3>(rng), mjukf::testing::randomCovariance<2>(rng));
   ASSERT_TRUE(covariance.correct(random(Eigen::Matrix<double, 2, 3>()), random(Eigen::Matrix<double, 3, 2>()),
                                  random(Eigen::Matrix2d()), random(Eigen::Matrix2d()),
-                                 random(Eigen::Matrix<double, 3, 2>()), Eigen::Matrix2d::Identity()));
+                                 random(Eigen::Matrix<double, 3, 2>()), Eigen::Matrix2d::Identity(), nullptr));
   covariance.commit();  // the candidate becomes committed(), which the test can read
   const Eigen::Matrix<double, 5, 5> joint = covariance.committed();
   ASSERT_GT((joint.topRightCorner<3, 2>().cwiseAbs().maxCoeff()), 0.1) << "a J with cross-covariances";
@@ -154,6 +156,151 @@ TEST(ParameterErrorCovariance, TheStateErrorCovarianceIsThatOfEtaPlusWe) {
   const Eigen::Matrix3d expected = map * joint * map.transpose();
   EXPECT_LT((sigma - expected).cwiseAbs().maxCoeff(), 64 * std::numeric_limits<double>::epsilon() * expected.norm());
   EXPECT_TRUE(sigma == sigma.transpose());
+}
+
+// The joint covariance's gain of θ (docs/algorithms.md §5.3) is the Kalman gain of the augmented linear
+// model: with z = (η, e) of covariance J and ν = −[H ψ] z + v, θ − θ̂ = −e, K_θ = cov(−e, ν) S⁻¹. Against
+// that formula written out, for a general J (cross-covariances), with P_θ widened, and with a component
+// missing (its column of K_θ zero, the rest the gain of the reduced model). Tolerance: a solve with S of
+// condition below 1e3 on entries of size 1, 1e-12.
+TEST(ParameterErrorCovariance, TheParameterGainIsTheKalmanGainOfTheJointModel) {
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> normal;
+  const auto random = [&](auto m) {
+    for (int i = 0; i < m.rows(); ++i)
+      for (int j = 0; j < m.cols(); ++j) m(i, j) = normal(rng);
+    return m;
+  };
+  mjukf::detail::ParameterErrorCovariance<double, 3, 2, 2> covariance;
+  covariance.start(mjukf::testing::randomCovariance<3>(rng), mjukf::testing::randomCovariance<2>(rng));
+  ASSERT_TRUE(covariance.correct(random(Eigen::Matrix<double, 2, 3>()), random(Eigen::Matrix<double, 3, 2>()),
+                                 random(Eigen::Matrix2d()), random(Eigen::Matrix2d()),
+                                 random(Eigen::Matrix<double, 3, 2>()), Eigen::Matrix2d::Identity(), nullptr));
+  covariance.commit();
+  const Eigen::Matrix<double, 5, 5> joint = covariance.committed();
+  const Eigen::Matrix<double, 2, 3> h = random(Eigen::Matrix<double, 2, 3>());
+  const Eigen::Matrix2d psi = random(Eigen::Matrix2d()), r = (Eigen::Matrix2d() << 0.3, 0.05, 0.05, 0.2).finished();
+  const Eigen::Matrix2d widening = mjukf::testing::randomCovariance<2>(rng);
+  const auto expected = [&](const Eigen::Matrix<double, 5, 5>& j, const Eigen::Matrix<double, 2, 3>& hh,
+                            const Eigen::Matrix2d& pp) {
+    Eigen::Matrix<double, 2, 5> map;
+    map << hh, pp;
+    const Eigen::Matrix2d s = map * j * map.transpose() + r;
+    return Eigen::Matrix2d(j.bottomRows<2>() * map.transpose() * s.inverse());
+  };
+  Eigen::Matrix2d gain, factor;
+  using Mask = Eigen::Matrix<bool, 2, 1>;
+  ASSERT_TRUE(covariance.parameterGain(h, psi, r, static_cast<const Mask*>(nullptr), nullptr, gain, factor));
+  EXPECT_LT((gain - expected(joint, h, psi)).cwiseAbs().maxCoeff(), 1e-12);
+  Eigen::Matrix<double, 5, 5> widened = joint;
+  widened.bottomRightCorner<2, 2>() += widening;
+  ASSERT_TRUE(covariance.parameterGain(h, psi, r, static_cast<const Mask*>(nullptr), &widening, gain, factor));
+  EXPECT_LT((gain - expected(widened, h, psi)).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_TRUE(covariance.committed() == joint) << "the widening reaches the candidate only";
+  // Component 1 missing: its rows of H and ψ are zero (as the filter passes them), S gets a unit entry.
+  const Mask present(true, false);
+  Eigen::Matrix<double, 2, 3> h0 = h;
+  Eigen::Matrix2d psi0 = psi;
+  h0.row(1).setZero();
+  psi0.row(1).setZero();
+  ASSERT_TRUE(covariance.parameterGain(h0, psi0, r, &present, nullptr, gain, factor));
+  Eigen::Matrix<double, 1, 5> map0;
+  map0 << h.row(0), psi.row(0);
+  const double s0 = (map0 * joint * map0.transpose())(0, 0) + r(0, 0);
+  const Eigen::Vector2d reduced = joint.bottomRows<2>() * map0.transpose() / s0;
+  EXPECT_LT((gain.col(0) - reduced).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_TRUE(gain.col(1).isZero());
+}
+
+// The test's threshold, χ²ₚ's upper quantile, against the closed forms of the tail: P(χ²₁ > x) =
+// erfc(√(x/2)), P(χ²₂ > x) = e^(−x/2), P(χ²₄ > x) = e^(−x/2)(1 + x/2). Its asymptotic form is exact for
+// p = 2 and 4 and off by the series' next term, (s − 1)(s − 2)/y² = 0.75/y² for p = 1 (y = x/2).
+TEST(ParameterChangeDetector, TheThresholdIsTheChiSquaredQuantile) {
+  for (const double alpha : {1e-6, 1e-9, 1e-12}) {
+    const double x1 = mjukf::detail::chiSquaredUpperQuantile(1, alpha);
+    const double x2 = mjukf::detail::chiSquaredUpperQuantile(2, alpha);
+    const double x4 = mjukf::detail::chiSquaredUpperQuantile(4, alpha);
+    EXPECT_NEAR(std::erfc(std::sqrt(x1 / 2)) / alpha, 1.0, 1.0 / (x1 * x1 / 4)) << alpha;
+    EXPECT_NEAR(std::exp(-x2 / 2) / alpha, 1.0, 1e-10) << alpha;
+    EXPECT_NEAR(std::exp(-x4 / 2) * (1 + x4 / 2) / alpha, 1.0, 1e-10) << alpha;
+    EXPECT_LT(x1, x2);
+    EXPECT_LT(x2, x4);
+  }
+}
+
+// A scalar θ seen through y = ψ θ + v (v of standard deviation 1, ψ cycling over 0.5, 0.75, 1): with θ̂
+// at the truth, 20,000 updates at α = 1e-9 raise no detection (the chance of one is at most 20,000 α =
+// 2e-5 over these correlated tests); with θ off by 1 from update 5,000 and a memory of 200 updates, z
+// grows by about ψ̄² ≈ 0.6 per update after the jump and passes χ²₁'s 37 within about 60, well within
+// a memory. δ̂ = I⁻¹ s is the change as if it had been there over the whole window, so for a change
+// inside the window it is smaller, of the right sign. The detection and δ̂ are the same, to rounding,
+// when S is taken 100 times too small (ν and ψ whitened by a wrong L).
+TEST(ParameterChangeDetector, FindsAJumpWithinAMemoryAndNothingWithout) {
+  using Detector = mjukf::detail::ParameterChangeDetector<double, 1, 1>;
+  const double lambda = std::exp(-1.0 / 200);
+  const auto run = [&](double jump, double scale, long& detectedAt, double& estimate, long& detections) {
+    Detector detector;
+    detector.start(1e-9);
+    std::mt19937_64 rng(17);
+    std::normal_distribution<double> normal;
+    detectedAt = -1;
+    detections = 0;
+    for (long k = 0; k < 20000; ++k) {
+      const double psi = 0.5 + 0.25 * double(k % 3);
+      const double offset = k >= 5000 ? jump : 0.0;
+      const double nu = psi * offset + normal(rng);  // ν = y − ψ θ̂
+      Eigen::Matrix<double, 1, 1> whitenedPsi, whitenedNu, change;
+      whitenedPsi(0) = psi / scale;  // L = scale: S = scale²
+      whitenedNu(0) = nu / scale;
+      if (detector.update(whitenedPsi, whitenedNu, lambda, 20, true, change)) {
+        ++detections;
+        if (detectedAt < 0) {
+          detectedAt = k;
+          estimate = change(0);
+        }
+      }
+      detector.commit();
+    }
+    EXPECT_EQ(detector.changes(), detections);
+  };
+  long at = 0, detections = 0;
+  double estimate = 0;
+  run(0.0, 1.0, at, estimate, detections);
+  EXPECT_EQ(detections, 0) << "a false alarm at update " << at;
+  run(1.0, 1.0, at, estimate, detections);
+  ASSERT_GE(at, 5000);
+  EXPECT_LT(at, 5200) << "found within a memory";
+  EXPECT_GT(estimate, 0.0);
+  EXPECT_LT(estimate, 1.0 + 4.0 / std::sqrt(0.25 * double(at - 5000 + 1))) << "no more than the jump and 4 σ";
+  long atSmall = 0, detectionsSmall = 0;
+  double estimateSmall = 0;
+  run(1.0, 0.1, atSmall, estimateSmall, detectionsSmall);
+  EXPECT_EQ(atSmall, at);
+  EXPECT_NEAR(estimateSmall, estimate, 1e-9 * std::abs(estimate));
+  EXPECT_EQ(detectionsSmall, detections);
+}
+
+// Disarmed (the filter still easing its steps in), the window stays empty: no test, no detection,
+// however large the innovations; α = 0 never detects.
+TEST(ParameterChangeDetector, DisarmedOrWithoutAFalseAlarmProbabilityItNeverFires) {
+  using Detector = mjukf::detail::ParameterChangeDetector<double, 1, 1>;
+  Eigen::Matrix<double, 1, 1> psi, nu, change;
+  psi(0) = 1;
+  nu(0) = 10;
+  Detector disarmed, off;
+  disarmed.start(1e-9);
+  off.start(0.0);
+  EXPECT_EQ(off.threshold(), std::numeric_limits<double>::infinity());
+  for (int k = 0; k < 1000; ++k) {
+    nu(0) = k % 2 ? 10.0 : 9.0;
+    EXPECT_FALSE(disarmed.update(psi, nu, 0.99, 20, false, change));
+    disarmed.commit();
+    EXPECT_FALSE(off.update(psi, nu, 0.99, 20, true, change));
+    off.commit();
+  }
+  EXPECT_EQ(disarmed.changes(), 0);
+  EXPECT_EQ(off.changes(), 0);
+  EXPECT_GT(off.statistic(), 100.0) << "the test ran and would have fired";
 }
 
 TYPED_TEST(EngineEstimate, CorrectionOfALinearMeasurementIsTheKalmanUpdate) {

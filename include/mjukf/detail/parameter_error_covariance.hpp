@@ -88,15 +88,49 @@ class ParameterErrorCovariance {
     return found;
   }
 
+  /// The Kalman gain of θ for the measurement update in progress (docs/algorithms.md §5.3): about the
+  /// committed prediction J⁻, with P_θ widened by `widening` when not null (a detected change, §5.4),
+  /// ν = −H η⁻ − ψ e + v has covariance S = [H ψ] J⁻ [H ψ]ᵀ + R, and θ − θ̂ = −e has covariance
+  /// J_eη Hᵀ + P_θ ψᵀ with it, so K_θ = (J_eη Hᵀ + P_θ ψᵀ) S⁻¹. The rows of H and ψ of missing components
+  /// are zero; `present` gives S a unit row and column there, which zeroes K_θ's column. K_θ into `gain`,
+  /// S's lower Cholesky factor into `innovationFactor`; false (both unspecified) when S is not positive
+  /// definite or K_θ not finite.
+  template <class Mask>
+  bool parameterGain(const MeasByState& jacobian, const MeasByParam& sensitivity, const MeasMatrix& measurementNoise,
+                     const Mask* present, const ParamMatrix* widening, ParamByMeas& gain,
+                     MeasMatrix& innovationFactor) {
+    const Joint& prior = priorWidenedBy(widening);
+    measured_.template leftCols<N>() = jacobian;
+    measured_.template rightCols<P>() = sensitivity;
+    measuredSpread_.noalias() = measured_ * prior;  // [H ψ] J⁻
+    MeasMatrix innovation = measurementNoise;
+    innovation.noalias() += measuredSpread_ * measured_.transpose();
+    if (present)
+      for (int j = 0; j < M; ++j)
+        if (!(*present)(j)) {
+          innovation.row(j).setZero();
+          innovation.col(j).setZero();
+          innovation(j, j) = Scalar(1);
+        }
+    symmetrize(innovation);
+    if (!allFinite(innovation) || !choleskyLower(innovation, innovationFactor)) return false;
+    // K_θᵀ = S⁻¹ (J⁻_e· [H ψ]ᵀ), the last p columns of ([H ψ] J⁻)ᵀ: J⁻ is symmetric.
+    Eigen::Matrix<Scalar, M, P> solved = measuredSpread_.template rightCols<P>();
+    solveLowerInPlace(innovationFactor, solved);
+    solveUpperInPlace(innovationFactor, solved);
+    gain = solved.transpose();
+    return allFinite(gain);
+  }
+
   /// The measurement update: ν = −H η⁻ − ψ e + v; the filter's state moves by K ν and θ̂ by −G ν, and W
-  /// becomes `correctedSensitivity` (W⁺). Then
+  /// becomes `correctedSensitivity` (W⁺); about J⁻ with P_θ widened by `widening` when not null. Then
   ///   e⁺ = (I + G ψ) e + G H η⁻ − G v,
   ///   η⁺ = (I − K H − W⁺ G H) η⁻ − W⁺ G ψ e + (K + W⁺ G) v.
   /// Columns of missing components are zero in H's rows, K and G. Returns false when the result is not
   /// finite.
   bool correct(const MeasByState& jacobian, const StateByMeas& gain, const ParamByMeas& parameterGain,
                const MeasByParam& sensitivity, const StateByParam& correctedSensitivity,
-               const MeasMatrix& measurementNoise) {
+               const MeasMatrix& measurementNoise, const ParamMatrix* widening) {
     // The error's map Z = [[I − K H − W⁺ G H, −W⁺ G ψ], [G H, I + G ψ]] and its noise V = [K + W⁺ G; −G].
     const Eigen::Matrix<Scalar, P, N> parameterFromState = parameterGain * jacobian;  // G H
     const ParamMatrix parameterFromParameter = parameterGain * sensitivity;           // G ψ
@@ -109,7 +143,7 @@ class ParameterErrorCovariance {
     noiseMap_.template topRows<N>() = gain;
     noiseMap_.template topRows<N>().noalias() += correctedSensitivity * parameterGain;
     noiseMap_.template bottomRows<P>() = -parameterGain;
-    spreadJoint_.noalias() = transition_ * joint_;  // the committed prediction
+    spreadJoint_.noalias() = transition_ * priorWidenedBy(widening);  // the committed prediction
     corrected_.noalias() = spreadJoint_ * transition_.transpose();
     noiseSpread_.noalias() = noiseMap_ * measurementNoise;
     corrected_.noalias() += noiseSpread_ * noiseMap_.transpose();
@@ -140,6 +174,14 @@ class ParameterErrorCovariance {
   const Joint& committed() const { return joint_; }
 
  private:
+  // J⁻ as committed, or a copy of it with P_θ widened.
+  const Joint& priorWidenedBy(const ParamMatrix* widening) {
+    if (!widening) return joint_;
+    widened_ = joint_;
+    widened_.template bottomRightCorner<P, P>() += *widening;
+    return widened_;
+  }
+
   Joint joint_ = Joint::Zero();                 // cov((η, e)) as committed
   Joint candidate_ = Joint::Zero();             // after the step in progress
   StateByParam effect_ = StateByParam::Zero();  // B = ∂Φ/∂θ from the last refresh of the sensitivities
@@ -149,7 +191,10 @@ class ParameterErrorCovariance {
   Joint transition_ = Joint::Zero(), spreadJoint_ = Joint::Zero(), corrected_ = Joint::Zero();
   Eigen::Matrix<Scalar, N + P, M> noiseMap_ = Eigen::Matrix<Scalar, N + P, M>::Zero();
   Eigen::Matrix<Scalar, N + P, M> noiseSpread_ = Eigen::Matrix<Scalar, N + P, M>::Zero();
-  StateByParam carried_ = StateByParam::Zero();  // cov(x̃, e) = J_ηe + W P_θ
+  StateByParam carried_ = StateByParam::Zero();                                         // cov(x̃, e) = J_ηe + W P_θ
+  Joint widened_ = Joint::Zero();                                                       // J⁻ with P_θ widened
+  Eigen::Matrix<Scalar, M, N + P> measured_ = Eigen::Matrix<Scalar, M, N + P>::Zero();  // [H ψ]
+  Eigen::Matrix<Scalar, M, N + P> measuredSpread_ = Eigen::Matrix<Scalar, M, N + P>::Zero();  // [H ψ] J⁻
 };
 
 }  // namespace mjukf::detail
