@@ -87,8 +87,9 @@ struct Snapshot {
   typename Filter::Meas::PlainObject innovationCovarianceDiagonal;
   Scalar nis;
   bool hasPropagatedPoints;
-  // The dual filter's parameter filter (empty for the others).
+  // The dual filter's parameter filter, and the MJUKF's P_θ and detected changes (empty for the others).
   Matrix parameterCovariance;
+  long detectedChanges = 0;
   Matrix parameterInnovation;
   Matrix parameterInnovationCovariance;
   Matrix parameterNis;
@@ -108,6 +109,8 @@ struct Snapshot {
                                                            k.measurementSensitivity().rows() + k.information().cols());
       automaticState << f.transformation(), f.scalings(), k.stateSensitivity().transpose(),
           k.measurementSensitivity().transpose(), k.information();
+      parameterCovariance = f.parameterCovariance();
+      detectedChanges = f.detectedParameterChanges();
     }
     if constexpr (IsDual<Filter>::value) {
       parameterCovariance = f.parameterCovariance();
@@ -124,7 +127,7 @@ struct Snapshot {
            bitwiseSame(automaticState, o.automaticState) && bitwiseSame(innovation, o.innovation) &&
            bitwiseSame(innovationCovarianceDiagonal, o.innovationCovarianceDiagonal) && nis == o.nis &&
            hasPropagatedPoints == o.hasPropagatedPoints && bitwiseSame(parameterCovariance, o.parameterCovariance) &&
-           bitwiseSame(parameterInnovation, o.parameterInnovation) &&
+           detectedChanges == o.detectedChanges && bitwiseSame(parameterInnovation, o.parameterInnovation) &&
            bitwiseSame(parameterInnovationCovariance, o.parameterInnovationCovariance) &&
            bitwiseSame(parameterNis, o.parameterNis);
   }

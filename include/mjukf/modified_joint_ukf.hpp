@@ -101,14 +101,15 @@ struct ModifiedJointUkfSettings : ParameterEstimationSettings<Scalar_, StateDim,
   /// `scaling` as given.
   bool adaptiveScaling = false;
   /// With `adaptiveScaling`: where the gain of θ comes from. The default, the joint covariance's Kalman
-  /// gain with a test for a change of θ, met JUKF's accuracy or better on all ten studied plants but the
-  /// battery; the least-squares gain was the default before (docs/tuning-mjukf.md, docs/studies.md).
+  /// gain with a test for a change of θ, was within 1.25 times JUKF's RMSE or better on every studied
+  /// case but the battery; the least-squares gain was the default before (docs/tuning-mjukf.md,
+  /// docs/studies.md).
   ParameterGain parameterGain = ParameterGain::JointCovariance;
   /// With `adaptiveScaling` and `ParameterGain::JointCovariance`: α, the probability that the test for a
-  /// change of θ fires at an update while θ is constant (docs/algorithms.md §5.4). It runs at every
-  /// update, so α is small: a run of 10⁵ updates sees no false alarm at the default, and a change that
-  /// moves the data by a few noise levels over a memory (`convergenceTime`) is found within it. 0: no
-  /// test, θ taken as constant for good. Must be in [0, 1).
+  /// change of θ fires at an update while θ is constant and the model right (docs/algorithms.md §5.4).
+  /// It runs at every update, so α is small; a model that does not fit the data, or innovations that are
+  /// correlated in time, fire it more often (`detectedParameterChanges()` counts the detections). 0: no
+  /// test, θ taken as constant for good. Must be in [0, 1e-3].
   Scalar changeFalseAlarm = Scalar(1e-9);
   /// With `adaptiveScaling`: a memory in seconds of model time. With the joint covariance's gain, the
   /// window of the test for a change of θ (its data fade with this time constant) and the scale of the
@@ -220,6 +221,7 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
     if constexpr (Automatic) {
       sensitivity_.restartState();
       errorCovariance_.restartState(covariance);
+      changeDetector_.restartWindow();  // the innovations of a state that settles again
     }
   }
 
@@ -318,6 +320,7 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
     const Settings& s = c.settings;
     if constexpr (Automatic) {
       if (followsSensitivities_) {
+        changeDetector_.discard();  // a candidate of an update that was refused after this call
         measurementJacobianAt(c);
         const Scalar memory = s.adaptiveScaling ? s.convergenceTime : std::numeric_limits<Scalar>::infinity();
         const Scalar updates = s.adaptiveScaling ? s.minimumMemoryUpdates : std::numeric_limits<Scalar>::infinity();
@@ -341,9 +344,9 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
     if constexpr (Automatic) {
       widened_ = false;
       if (s.adaptiveScaling) {
-        if (s.parameterGain == ParameterGain::JointCovariance)
-          jointCovarianceGain(c);
-        else
+        if (s.parameterGain == ParameterGain::JointCovariance) {
+          if (!jointCovarianceGain(c)) return Status::NonFiniteResult;
+        } else
           sensitivity_.leastSquaresGain(c.innovationFactor, parameterGain_);
         sensitivity_.scaling(candidateTransformation_, parameterGain_, candidateScalings_);
       }
@@ -365,9 +368,13 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
     }
     candidateParameters_ = candidateParameterPoints_.rowwise().sum() / Scalar(Count);  // eq. 10
     if (!allFinite(candidateParameterPoints_) || !allFinite(candidateParameters_)) return Status::NonFiniteResult;
-    // P_θ never refuses a step: an unbounded P_θ is reported (and passed on to the floor of P⁻, §5.2).
+    // P_θ refuses no step of the least-squares gain: an unbounded P_θ is reported (and passed on to the
+    // floor of P⁻, §5.2). The joint covariance's gain is taken from it, and a J that is not finite is not
+    // committed: the step is refused instead (it would leave every later gain undefined).
     if constexpr (Automatic)
-      if (followsSensitivities_) correctErrorCovariance(c);
+      if (followsSensitivities_ && !correctErrorCovariance(c) && s.adaptiveScaling &&
+          s.parameterGain == ParameterGain::JointCovariance)
+        return Status::NonFiniteResult;
     return Status::Ok;
   }
   void constrainMean(Vector&) {}
@@ -423,42 +430,44 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
 
   // The joint covariance's gain of θ (docs/algorithms.md §5.3) into parameterGain_, after the test for a
   // change of θ (§5.4) has run on this update's innovation: on a detection δ̂, P_θ is widened by δ̂ δ̂ᵀ for
-  // this update (and through it, for good) and the gain taken again. No gain (S not positive definite,
-  // J not finite): zero, θ̂ stays.
+  // this update (and through it, for good) and the gain taken again. False when there is no gain (S not
+  // positive definite, J not finite); a widened gain that fails withdraws the detection instead.
   template <class Correction>
-  void jointCovarianceGain(const Correction& c) {
+  bool jointCovarianceGain(const Correction& c) {
     const auto& psi = sensitivity_.candidateMeasurementSensitivity();
     if (!errorCovariance_.parameterGain(measurementJacobian_, psi, c.settings.measurementNoise, c.present, nullptr,
-                                        parameterGain_, jointInnovationFactor_)) {
-      parameterGain_.setZero();
-      return;
-    }
+                                        parameterGain_, jointInnovationFactor_))
+      return false;
     whitenedSensitivity_ = psi;
     detail::solveLowerInPlace(jointInnovationFactor_, whitenedSensitivity_);  // L⁻¹ ψ
     Meas whitenedInnovation = nominalInnovation_;
     detail::solveLowerInPlace(jointInnovationFactor_, whitenedInnovation);  // L⁻¹ ν
-    // Tested once the easing has let the steps in, over at least a tenth of the memory (and 20 updates).
-    const bool armed = sensitivity_.weight() >= kArmedWeight;
-    const Scalar leastCount = std::max(kLeastWindowUpdates, kLeastWindowShare * sensitivity_.memoryUpdates());
+    // Tested once the easing's first ramp is over, on a window of at least a tenth of the memory.
     Param change;
-    if (!changeDetector_.update(whitenedSensitivity_, whitenedInnovation, sensitivity_.forgetting(), leastCount, armed,
-                                change))
-      return;
+    if (!changeDetector_.update(whitenedSensitivity_, whitenedInnovation, sensitivity_.forgetting(),
+                                kLeastWindowShare * sensitivity_.memoryUpdates(), sensitivity_.rampComplete(), change))
+      return true;
     widening_.noalias() = change * change.transpose();
+    Transformation widenedGain;
+    MeasMatrix widenedFactor;
     widened_ = errorCovariance_.parameterGain(measurementJacobian_, psi, c.settings.measurementNoise, c.present,
-                                              &widening_, parameterGain_, jointInnovationFactor_);
-    if (!widened_) parameterGain_.setZero();
+                                              &widening_, widenedGain, widenedFactor);
+    if (widened_)
+      parameterGain_ = widenedGain;
+    else
+      changeDetector_.discard();
+    return true;
   }
 
   // The covariance of θ̂ (detail/parameter_error_covariance.hpp) with this update's gains: K = U S⁻¹,
   // G = diag(ξ) T, and H from measurementJacobianAt; P_θ widened when the test found a change.
   template <class Correction>
-  void correctErrorCovariance(const Correction& c) {
+  bool correctErrorCovariance(const Correction& c) {
     stateGainTransposed_ = c.gainFactor.transpose();
     detail::solveUpperInPlace(c.innovationFactor, stateGainTransposed_);  // Kᵀ = S⁻ᵀ Uᵀ
-    errorCovariance_.correct(measurementJacobian_, stateGainTransposed_.transpose(), gain_,
-                             sensitivity_.candidateMeasurementSensitivity(), sensitivity_.candidateStateSensitivity(),
-                             c.settings.measurementNoise, widened_ ? &widening_ : nullptr);
+    return errorCovariance_.correct(
+        measurementJacobian_, stateGainTransposed_.transpose(), gain_, sensitivity_.candidateMeasurementSensitivity(),
+        sensitivity_.candidateStateSensitivity(), c.settings.measurementNoise, widened_ ? &widening_ : nullptr);
   }
 
   // T with the columns of missing components zeroed and each row rescaled to Σⱼ |tᵣⱼ| = 1 (eq. 14).
@@ -505,10 +514,7 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<Meas, 15> nominalInnovation_{Meas::Zero()};
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<ParamMatrix, 16> widening_{ParamMatrix::Zero()};
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<bool, 17> widened_{false};
-  // The test for a change is armed once the easing's weight w has reached this, and tests a window of at
-  // least this many updates and this share of the memory (docs/algorithms.md §5.4).
-  static constexpr Scalar kArmedWeight = Scalar(0.9);
-  static constexpr Scalar kLeastWindowUpdates = Scalar(20);
+  // The test for a change tests a window of at least this share of the memory (docs/algorithms.md §5.4).
   static constexpr Scalar kLeastWindowShare = Scalar(0.1);
   // The automatic modes' state (committed with the parameters).
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<Sensitivity, 1> sensitivity_;
@@ -618,8 +624,9 @@ class ModifiedJointUkf
       return detail::invalid(kOwner, "sensitivityInterval",
                              "must be 1 with parameterGain JointCovariance, whose gain needs this step's "
                              "sensitivities (RecursiveLeastSquares allows another)");
-    if (settings.adaptiveScaling && !(settings.changeFalseAlarm >= 0 && settings.changeFalseAlarm < 1))
-      return detail::invalid(kOwner, "changeFalseAlarm", "must be in [0, 1) (a probability)");
+    if (settings.adaptiveScaling &&
+        !(settings.changeFalseAlarm >= 0 && settings.changeFalseAlarm <= Scalar(detail::kLargestFalseAlarm)))
+      return detail::invalid(kOwner, "changeFalseAlarm", "must be in [0, 1e-3] (a probability per update; 0: no test)");
     // Each row of T has Σⱼ |tᵣⱼ| = 1 (paper eq. 14, with signed entries): T only distributes the error
     // and its direction, ξ sets its scale. A T that does not is almost always a typo or a transposed
     // matrix. (With automaticTransformation, T is the filter's.)

@@ -182,6 +182,7 @@ class ParameterSensitivity {
     }
     weight_ = std::min(Scalar(1), Scalar(corrections_ + 1) / (easing * memoryUpdates_));
     if (!(weight_ > Scalar(0))) weight_ = Scalar(1);  // an infinite memory: no easing
+    rampComplete_ = weight_ >= Scalar(1);
     // The share of P_yy that is the sensor's noise, tr(R P_yy⁻¹) / m = |S⁻¹ √R|²_F / m: small while the
     // state estimate is uncertain, at its steady level once it has settled. Against the largest share
     // seen so far, it eases the steps in for as long as the state takes to settle, in any time unit.
@@ -277,6 +278,8 @@ class ParameterSensitivity {
   /// that error from moving θ̂ early (docs/tuning-mjukf.md). The information is not weighed: it only says
   /// how much is known, and a weight on it would cancel in the step once the data outweigh the prior.
   Scalar weight() const { return weight_; }
+  /// Whether the update in progress is past the easing's first ramp, (k + 1) / (easing · memory) ≥ 1.
+  bool rampComplete() const { return rampComplete_; }
   /// λ of the memory for the update in progress, max(exp(−Δt / memory), exp(−1 / minimumUpdates)).
   Scalar forgetting() const { return forgetting_; }
   /// The memory in measurement updates, −1 / ln λ (infinite for λ = 1).
@@ -321,6 +324,7 @@ class ParameterSensitivity {
   // λ of the last interval, and the memory in updates it makes, −1 / ln λ.
   Scalar forgettingInterval_ = -1, forgettingMemory_ = -1, forgettingUpdates_ = -1, forgetting_ = 1;
   Scalar memoryUpdates_ = std::numeric_limits<Scalar>::infinity();
+  bool rampComplete_ = true;                                         // the update in progress is past the first ramp
   Scalar weight_ = 1;                                                // w of the update in progress
   Scalar largestShare_ = 0, candidateLargestShare_ = 0;              // the largest tr(R P_yy⁻¹) / m seen
   Scalar typicalInformation_ = 0, candidateTypicalInformation_ = 0;  // j̄, the running level of j

@@ -129,22 +129,33 @@ TYPED_TEST(EngineEstimate, AFloorRaisesThePredictionToCoverItAndNoMore) {
   EXPECT_GE(mixed, 10) << "too few floors neither below nor above the prediction to test the general case";
 }
 
+// A matrix of the shape of `m` with standard normal entries.
+template <class Matrix>
+Matrix randomNormal(std::mt19937_64& rng, Matrix m) {
+  std::normal_distribution<double> normal;
+  for (int i = 0; i < m.rows(); ++i)
+    for (int j = 0; j < m.cols(); ++j) m(i, j) = normal(rng);
+  return m;
+}
+
+// A joint covariance J of (η, e) with cross-covariances: random P₀ and P_θ, then a measurement update of
+// random gains (not yet committed).
+bool startCorrelated(std::mt19937_64& rng, mjukf::detail::ParameterErrorCovariance<double, 3, 2, 2>& covariance) {
+  covariance.start(mjukf::testing::randomCovariance<3>(rng), mjukf::testing::randomCovariance<2>(rng));
+  return covariance.correct(randomNormal(rng, Eigen::Matrix<double, 2, 3>()),
+                            randomNormal(rng, Eigen::Matrix<double, 3, 2>()), randomNormal(rng, Eigen::Matrix2d()),
+                            randomNormal(rng, Eigen::Matrix2d()), randomNormal(rng, Eigen::Matrix<double, 3, 2>()),
+                            Eigen::Matrix2d::Identity(), nullptr);
+}
+
 // The floor the MJUKF gives (detail/parameter_error_covariance.hpp): cov(η + W e) = [I W] J [I W]ᵀ for the
 // joint covariance J of (η, e), here a general one (cross-covariances from a measurement update of
 // random gains), symmetric to the last bit. Tolerance: sums of n + p products of entries of size 1.
 TEST(ParameterErrorCovariance, TheStateErrorCovarianceIsThatOfEtaPlusWe) {
   std::mt19937_64 rng(3);
-  std::normal_distribution<double> normal;
-  const auto random = [&](auto m) {
-    for (int i = 0; i < m.rows(); ++i)
-      for (int j = 0; j < m.cols(); ++j) m(i, j) = normal(rng);
-    return m;
-  };
+  const auto random = [&](auto m) { return randomNormal(rng, m); };
   mjukf::detail::ParameterErrorCovariance<double, 3, 2, 2> covariance;
-  covariance.start(mjukf::testing::randomCovariance<3>(rng), mjukf::testing::randomCovariance<2>(rng));
-  ASSERT_TRUE(covariance.correct(random(Eigen::Matrix<double, 2, 3>()), random(Eigen::Matrix<double, 3, 2>()),
-                                 random(Eigen::Matrix2d()), random(Eigen::Matrix2d()),
-                                 random(Eigen::Matrix<double, 3, 2>()), Eigen::Matrix2d::Identity(), nullptr));
+  ASSERT_TRUE(startCorrelated(rng, covariance));
   covariance.commit();  // the candidate becomes committed(), which the test can read
   const Eigen::Matrix<double, 5, 5> joint = covariance.committed();
   ASSERT_GT((joint.topRightCorner<3, 2>().cwiseAbs().maxCoeff()), 0.1) << "a J with cross-covariances";
@@ -165,17 +176,9 @@ TEST(ParameterErrorCovariance, TheStateErrorCovarianceIsThatOfEtaPlusWe) {
 // condition below 1e3 on entries of size 1, 1e-12.
 TEST(ParameterErrorCovariance, TheParameterGainIsTheKalmanGainOfTheJointModel) {
   std::mt19937_64 rng(5);
-  std::normal_distribution<double> normal;
-  const auto random = [&](auto m) {
-    for (int i = 0; i < m.rows(); ++i)
-      for (int j = 0; j < m.cols(); ++j) m(i, j) = normal(rng);
-    return m;
-  };
+  const auto random = [&](auto m) { return randomNormal(rng, m); };
   mjukf::detail::ParameterErrorCovariance<double, 3, 2, 2> covariance;
-  covariance.start(mjukf::testing::randomCovariance<3>(rng), mjukf::testing::randomCovariance<2>(rng));
-  ASSERT_TRUE(covariance.correct(random(Eigen::Matrix<double, 2, 3>()), random(Eigen::Matrix<double, 3, 2>()),
-                                 random(Eigen::Matrix2d()), random(Eigen::Matrix2d()),
-                                 random(Eigen::Matrix<double, 3, 2>()), Eigen::Matrix2d::Identity(), nullptr));
+  ASSERT_TRUE(startCorrelated(rng, covariance));
   covariance.commit();
   const Eigen::Matrix<double, 5, 5> joint = covariance.committed();
   const Eigen::Matrix<double, 2, 3> h = random(Eigen::Matrix<double, 2, 3>());
@@ -210,6 +213,31 @@ TEST(ParameterErrorCovariance, TheParameterGainIsTheKalmanGainOfTheJointModel) {
   const Eigen::Vector2d reduced = joint.bottomRows<2>() * map0.transpose() / s0;
   EXPECT_LT((gain.col(0) - reduced).cwiseAbs().maxCoeff(), 1e-12);
   EXPECT_TRUE(gain.col(1).isZero());
+}
+
+// The measurement update of J with P_θ widened (a detected change, §5.4) is the update of the J whose
+// P_θ is larger by the widening, bit for bit (the same sums in the same order), and the committed J is
+// not touched until commit().
+TEST(ParameterErrorCovariance, AWidenedUpdateIsTheUpdateOfTheWidenedCovariance) {
+  std::mt19937_64 rng(9);
+  const auto random = [&](auto m) { return randomNormal(rng, m); };
+  const Eigen::Matrix3d stateCovariance = mjukf::testing::randomCovariance<3>(rng);
+  const Eigen::Matrix2d parameterCovariance = mjukf::testing::randomCovariance<2>(rng);
+  const Eigen::Matrix2d widening = mjukf::testing::randomCovariance<2>(rng);
+  mjukf::detail::ParameterErrorCovariance<double, 3, 2, 2> widenedInCorrect, widenedAtStart;
+  widenedInCorrect.start(stateCovariance, parameterCovariance);
+  widenedAtStart.start(stateCovariance, Eigen::Matrix2d(parameterCovariance + widening));
+  const Eigen::Matrix<double, 2, 3> h = random(Eigen::Matrix<double, 2, 3>());
+  const Eigen::Matrix<double, 3, 2> k = random(Eigen::Matrix<double, 3, 2>()),
+                                    w = random(Eigen::Matrix<double, 3, 2>());
+  const Eigen::Matrix2d g = random(Eigen::Matrix2d()), psi = random(Eigen::Matrix2d());
+  const Eigen::Matrix<double, 5, 5> before = widenedInCorrect.committed();
+  ASSERT_TRUE(widenedInCorrect.correct(h, k, g, psi, w, Eigen::Matrix2d::Identity(), &widening));
+  ASSERT_TRUE(widenedAtStart.correct(h, k, g, psi, w, Eigen::Matrix2d::Identity(), nullptr));
+  EXPECT_TRUE(widenedInCorrect.committed() == before) << "the widening reaches the candidate only";
+  widenedInCorrect.commit();
+  widenedAtStart.commit();
+  EXPECT_TRUE(widenedInCorrect.committed() == widenedAtStart.committed());
 }
 
 // The test's threshold, χ²ₚ's upper quantile, against the closed forms of the tail: P(χ²₁ > x) =
@@ -280,27 +308,35 @@ TEST(ParameterChangeDetector, FindsAJumpWithinAMemoryAndNothingWithout) {
   EXPECT_EQ(detectionsSmall, detections);
 }
 
-// Disarmed (the filter still easing its steps in), the window stays empty: no test, no detection,
-// however large the innovations; α = 0 never detects.
+// Innovations that a constant θ cannot explain (ν ≈ 10 σ every update): an armed test with α = 1e-9
+// fires (the control, the first time once its window holds the threshold's 37 updates: z ≤ the count),
+// a disarmed one (the filter still easing its steps in) keeps its window empty and never tests, and
+// α = 0 never tests either.
 TEST(ParameterChangeDetector, DisarmedOrWithoutAFalseAlarmProbabilityItNeverFires) {
   using Detector = mjukf::detail::ParameterChangeDetector<double, 1, 1>;
   Eigen::Matrix<double, 1, 1> psi, nu, change;
   psi(0) = 1;
-  nu(0) = 10;
-  Detector disarmed, off;
+  Detector armed, disarmed, off;
+  armed.start(1e-9);
   disarmed.start(1e-9);
   off.start(0.0);
   EXPECT_EQ(off.threshold(), std::numeric_limits<double>::infinity());
+  long firstDetection = -1;
   for (int k = 0; k < 1000; ++k) {
     nu(0) = k % 2 ? 10.0 : 9.0;
+    if (armed.update(psi, nu, 0.99, 20, true, change) && firstDetection < 0) firstDetection = k;
+    armed.commit();
     EXPECT_FALSE(disarmed.update(psi, nu, 0.99, 20, false, change));
     disarmed.commit();
     EXPECT_FALSE(off.update(psi, nu, 0.99, 20, true, change));
     off.commit();
   }
+  EXPECT_EQ(firstDetection, long(std::ceil(armed.threshold())) - 1) << "the control fires as soon as it may";
+  EXPECT_GT(armed.changes(), 10);
   EXPECT_EQ(disarmed.changes(), 0);
+  EXPECT_EQ(disarmed.statistic(), 0.0) << "never tested";
   EXPECT_EQ(off.changes(), 0);
-  EXPECT_GT(off.statistic(), 100.0) << "the test ran and would have fired";
+  EXPECT_EQ(off.statistic(), 0.0) << "never tested";
 }
 
 TYPED_TEST(EngineEstimate, CorrectionOfALinearMeasurementIsTheKalmanUpdate) {

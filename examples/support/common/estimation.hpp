@@ -72,6 +72,8 @@ struct EstimateRun {
   /// them) (health.hpp; docs/robustness.md, "The health monitor").
   Health health = Health::Ok;
   HealthStatistics<typename Model::Scalar> healthStatistics;
+  /// The changes of θ the automatic MJUKF's test found (docs/algorithms.md §5.4); empty for the others.
+  std::optional<long> parameterChanges;
 };
 
 namespace detail {
@@ -80,6 +82,12 @@ template <class Filter, class = void>
 struct HasParameterCovariance : std::false_type {};
 template <class Filter>
 struct HasParameterCovariance<Filter, std::void_t<decltype(std::declval<const Filter&>().parameterCovariance())>>
+    : std::true_type {};
+
+template <class Filter, class = void>
+struct HasChangeTest : std::false_type {};
+template <class Filter>
+struct HasChangeTest<Filter, std::void_t<decltype(std::declval<const Filter&>().detectedParameterChanges())>>
     : std::true_type {};
 
 // The covariance of θ̂ a filter reports: the dual's P^θ, JUKF's θ block of P; none for the others.
@@ -114,6 +122,8 @@ EstimateRun<Model> runSchedule(Filter& filter, const PlantData<Model>& data, int
   run.finalParameterCovariance = parameterCovarianceOf(filter);
   run.health = filter.health();
   run.healthStatistics = filter.healthStatistics();
+  if constexpr (HasChangeTest<Filter>::value)
+    if (filter.settings().adaptiveScaling) run.parameterChanges = filter.detectedParameterChanges();
   if (run.outcome.status != Status::Ok) {  // keep only the rows that were estimated
     run.state.resize(static_cast<std::size_t>(run.outcome.row));
     run.parameters.resize(static_cast<std::size_t>(run.outcome.row));

@@ -231,6 +231,8 @@ struct StudyResult {
   long stoppedAtRow = 0;  ///< the refused row, or the last row when the run went through
   long repairs = 0;
   long rejected = 0;
+  /// The changes of θ the automatic MJUKF's test found; unset for the other filters.
+  std::optional<long> parameterChanges;
 };
 
 /// Diverged: the filter refused a step (the run stopped early), or a final parameter estimate is not
@@ -449,6 +451,7 @@ int studyCommand(const std::vector<std::string>& words) {
           result.stoppedAtRow = run.outcome.row;
           result.repairs = run.outcome.repairs;
           result.rejected = run.outcome.rejected;
+          result.parameterChanges = run.parameterChanges;
           results[r].push_back(result);
         }
       },
@@ -470,6 +473,7 @@ int studyCommand(const std::vector<std::string>& words) {
   header.insert(header.end(), {"nees", "health", "updates_to_alarm", "first_alarm", "blocks", "alarmed_blocks",
                                "final_relative_error", "parameter_correlation"});
   for (const auto& q : Plant::parameters) header.push_back(std::string("sigma_") + q.name);
+  header.push_back("parameter_changes");
   const int divergedColumn = 4 + p;
   {
     CsvWriter csv(*csvFile, header);
@@ -486,6 +490,7 @@ int studyCommand(const std::vector<std::string>& words) {
             << std::string(toString(result.firstAlarm)) << double(result.blocks) << double(result.alarmedBlocks)
             << result.finalRelativeError << result.parameterCorrelation;
         for (double v : result.finalSigma) csv << v;
+        csv << (result.parameterChanges ? double(*result.parameterChanges) : std::nan(""));
         csv.endRow();
       }
     csv.close();

@@ -5,6 +5,7 @@
 // changed would be followed ever more slowly; this test finds such a change in the innovations and
 // says how large it is, and the filter widens P_θ by it.
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -15,18 +16,30 @@
 
 namespace mjukf::detail {
 
-/// χ²ₚ's upper quantile at probability α (the x with P(χ²ₚ > x) = α), for a small α: the fixed point
-/// of the tail's asymptotic form Q(s, y) ≈ y^(s−1) e^(−y) (1 + (s − 1) / y) / Γ(s), s = p / 2, y = x / 2,
-/// exact for p = 2 and within 0.1 % of the quantile for p ≤ 10 at α ≤ 1e-6 (tested against the closed
-/// forms for p = 1, 2, 4). It converges because x > p there.
+/// ln Γ(p / 2) for p ≥ 1, from Γ(k) = (k − 1)! and Γ(k + ½) = √π (1/2)(3/2)…(k − ½): std::lgamma may
+/// write the global signgam, which a filter built on two threads must not.
+template <class Scalar>
+Scalar logGammaOfHalf(int p) {
+  Scalar sum = p % 2 == 0 ? Scalar(0) : Scalar(0.5) * std::log(Scalar(3.14159265358979323846));
+  for (int k = p % 2 == 0 ? 1 : 0; 2 * k + (p % 2) < p; ++k) sum += std::log(Scalar(k) + Scalar(p % 2) / Scalar(2));
+  return sum;
+}
+
+/// The largest false-alarm probability `chiSquaredUpperQuantile` serves (its tail form needs x ≫ p).
+inline constexpr double kLargestFalseAlarm = 1e-3;
+
+/// χ²ₚ's upper quantile at probability α ≤ 1e-3 (the x with P(χ²ₚ > x) = α): the fixed point of the
+/// tail's asymptotic form Q(s, y) ≈ y^(s−1) e^(−y) (1 + (s − 1) / y) / Γ(s), s = p / 2, y = x / 2, exact
+/// for p = 2 and 4 and off by the series' next term, (s − 1)(s − 2) / y², elsewhere (tested against the
+/// closed forms for p = 1, 2, 4). The iteration converges because y > s there.
 template <class Scalar>
 Scalar chiSquaredUpperQuantile(int p, Scalar alpha) {
   const Scalar s = Scalar(p) / Scalar(2);
-  const Scalar logTail = -std::log(alpha) - std::lgamma(s);
+  const Scalar logTail = -std::log(alpha) - logGammaOfHalf<Scalar>(p);
   Scalar y = -std::log(alpha) + s;
-  for (int i = 0; i < 50; ++i) {
+  for (int i = 0; i < 100; ++i) {
     const Scalar next = logTail + (s - Scalar(1)) * std::log(y) + std::log1p((s - Scalar(1)) / y);
-    if (std::abs(next - y) <= Scalar(1e-12) * y) return Scalar(2) * next;
+    if (std::abs(next - y) <= Scalar(4) * std::numeric_limits<Scalar>::epsilon() * y) return Scalar(2) * next;
     y = next;
   }
   return Scalar(2) * y;
@@ -61,8 +74,10 @@ class ParameterChangeDetector {
   }
 
   /// One measurement update, into the candidate: `whitenedSensitivity` = L⁻¹ ψ and `whitenedInnovation`
-  /// = L⁻¹ ν with S = L Lᵀ, `forgetting` λ, `armed` false while the steps are eased in, and at least
-  /// `minimumCount` updates in the window before a test. True on a detection, with δ̂ in `change`.
+  /// = L⁻¹ ν with S = L Lᵀ, `forgetting` λ, `armed` false while the steps are eased in (the window stays
+  /// empty), and a test once the window holds at least `minimumCount` updates and at least the threshold's
+  /// worth: z ≤ the number of updates in the window (Cauchy–Schwarz), so a shorter one cannot pass. True
+  /// on a detection, with δ̂ in `change`.
   bool update(const MeasSensitivity& whitenedSensitivity, const Meas& whitenedInnovation, Scalar forgetting,
               Scalar minimumCount, bool armed, Param& change) {
     Window& w = candidate_;
@@ -78,7 +93,7 @@ class ParameterChangeDetector {
     w.information = forgetting * w.information;
     w.information.noalias() += whitenedSensitivity.transpose() * whitenedSensitivity;
     ++w.count;
-    if (Scalar(w.count) <= minimumCount || !allFinite(w.score)) return false;
+    if (Scalar(w.count) < std::max(minimumCount, threshold_) || !allFinite(w.score)) return false;
     // LDLT, whose solve leaves out a zero pivot: a parameter the measurements do not move has gⱼ = 0 and
     // a zero row in V and I, and drops out of the test instead of blocking it.
     w.statistic = w.score.dot(w.scoreCovariance.ldlt().solve(w.score));  // z = sᵀ V⁻¹ s
@@ -90,6 +105,8 @@ class ParameterChangeDetector {
     return true;
   }
   void commit() { committed_ = candidate_; }
+  /// Drops the candidate (a measurement update that will not be committed, or a detection withdrawn).
+  void discard() { candidate_ = committed_; }
   /// An empty window, keeping the count of changes (a new pass over a record).
   void restartWindow() {
     clearWindow(committed_);
