@@ -129,10 +129,11 @@ TYPED_TEST(EngineEstimate, AFloorRaisesThePredictionToCoverItAndNoMore) {
   EXPECT_GE(mixed, 10) << "too few floors neither below nor above the prediction to test the general case";
 }
 
-// A matrix of the shape of `m` with standard normal entries.
+// A fixed-size matrix with standard normal entries.
 template <class Matrix>
-Matrix randomNormal(std::mt19937_64& rng, Matrix m) {
+Matrix randomNormal(std::mt19937_64& rng) {
   std::normal_distribution<double> normal;
+  Matrix m;
   for (int i = 0; i < m.rows(); ++i)
     for (int j = 0; j < m.cols(); ++j) m(i, j) = normal(rng);
   return m;
@@ -142,10 +143,12 @@ Matrix randomNormal(std::mt19937_64& rng, Matrix m) {
 // random gains (not yet committed).
 bool startCorrelated(std::mt19937_64& rng, mjukf::detail::ParameterErrorCovariance<double, 3, 2, 2>& covariance) {
   covariance.start(mjukf::testing::randomCovariance<3>(rng), mjukf::testing::randomCovariance<2>(rng));
-  return covariance.correct(randomNormal(rng, Eigen::Matrix<double, 2, 3>()),
-                            randomNormal(rng, Eigen::Matrix<double, 3, 2>()), randomNormal(rng, Eigen::Matrix2d()),
-                            randomNormal(rng, Eigen::Matrix2d()), randomNormal(rng, Eigen::Matrix<double, 3, 2>()),
-                            Eigen::Matrix2d::Identity(), nullptr);
+  const auto h = randomNormal<Eigen::Matrix<double, 2, 3>>(rng);  // drawn in order: arguments are not
+  const auto k = randomNormal<Eigen::Matrix<double, 3, 2>>(rng);
+  const auto g = randomNormal<Eigen::Matrix2d>(rng);
+  const auto psi = randomNormal<Eigen::Matrix2d>(rng);
+  const auto w = randomNormal<Eigen::Matrix<double, 3, 2>>(rng);
+  return covariance.correct(h, k, g, psi, w, Eigen::Matrix2d::Identity(), nullptr);
 }
 
 // The floor the MJUKF gives (detail/parameter_error_covariance.hpp): cov(η + W e) = [I W] J [I W]ᵀ for the
@@ -153,13 +156,12 @@ bool startCorrelated(std::mt19937_64& rng, mjukf::detail::ParameterErrorCovarian
 // random gains), symmetric to the last bit. Tolerance: sums of n + p products of entries of size 1.
 TEST(ParameterErrorCovariance, TheStateErrorCovarianceIsThatOfEtaPlusWe) {
   std::mt19937_64 rng(3);
-  const auto random = [&](auto m) { return randomNormal(rng, m); };
   mjukf::detail::ParameterErrorCovariance<double, 3, 2, 2> covariance;
   ASSERT_TRUE(startCorrelated(rng, covariance));
   covariance.commit();  // the candidate becomes committed(), which the test can read
   const Eigen::Matrix<double, 5, 5> joint = covariance.committed();
   ASSERT_GT((joint.topRightCorner<3, 2>().cwiseAbs().maxCoeff()), 0.1) << "a J with cross-covariances";
-  const Eigen::Matrix<double, 3, 2> w = random(Eigen::Matrix<double, 3, 2>());
+  const Eigen::Matrix<double, 3, 2> w = randomNormal<Eigen::Matrix<double, 3, 2>>(rng);
   Eigen::Matrix<double, 3, 5> map;
   map << Eigen::Matrix3d::Identity(), w;
   Eigen::Matrix3d sigma;
@@ -176,13 +178,13 @@ TEST(ParameterErrorCovariance, TheStateErrorCovarianceIsThatOfEtaPlusWe) {
 // condition below 1e3 on entries of size 1, 1e-12.
 TEST(ParameterErrorCovariance, TheParameterGainIsTheKalmanGainOfTheJointModel) {
   std::mt19937_64 rng(5);
-  const auto random = [&](auto m) { return randomNormal(rng, m); };
   mjukf::detail::ParameterErrorCovariance<double, 3, 2, 2> covariance;
   ASSERT_TRUE(startCorrelated(rng, covariance));
   covariance.commit();
   const Eigen::Matrix<double, 5, 5> joint = covariance.committed();
-  const Eigen::Matrix<double, 2, 3> h = random(Eigen::Matrix<double, 2, 3>());
-  const Eigen::Matrix2d psi = random(Eigen::Matrix2d()), r = (Eigen::Matrix2d() << 0.3, 0.05, 0.05, 0.2).finished();
+  const Eigen::Matrix<double, 2, 3> h = randomNormal<Eigen::Matrix<double, 2, 3>>(rng);
+  const Eigen::Matrix2d psi = randomNormal<Eigen::Matrix2d>(rng),
+                        r = (Eigen::Matrix2d() << 0.3, 0.05, 0.05, 0.2).finished();
   const Eigen::Matrix2d widening = mjukf::testing::randomCovariance<2>(rng);
   const auto expected = [&](const Eigen::Matrix<double, 5, 5>& j, const Eigen::Matrix<double, 2, 3>& hh,
                             const Eigen::Matrix2d& pp) {
@@ -220,17 +222,16 @@ TEST(ParameterErrorCovariance, TheParameterGainIsTheKalmanGainOfTheJointModel) {
 // not touched until commit().
 TEST(ParameterErrorCovariance, AWidenedUpdateIsTheUpdateOfTheWidenedCovariance) {
   std::mt19937_64 rng(9);
-  const auto random = [&](auto m) { return randomNormal(rng, m); };
   const Eigen::Matrix3d stateCovariance = mjukf::testing::randomCovariance<3>(rng);
   const Eigen::Matrix2d parameterCovariance = mjukf::testing::randomCovariance<2>(rng);
   const Eigen::Matrix2d widening = mjukf::testing::randomCovariance<2>(rng);
   mjukf::detail::ParameterErrorCovariance<double, 3, 2, 2> widenedInCorrect, widenedAtStart;
   widenedInCorrect.start(stateCovariance, parameterCovariance);
   widenedAtStart.start(stateCovariance, Eigen::Matrix2d(parameterCovariance + widening));
-  const Eigen::Matrix<double, 2, 3> h = random(Eigen::Matrix<double, 2, 3>());
-  const Eigen::Matrix<double, 3, 2> k = random(Eigen::Matrix<double, 3, 2>()),
-                                    w = random(Eigen::Matrix<double, 3, 2>());
-  const Eigen::Matrix2d g = random(Eigen::Matrix2d()), psi = random(Eigen::Matrix2d());
+  const Eigen::Matrix<double, 2, 3> h = randomNormal<Eigen::Matrix<double, 2, 3>>(rng);
+  const Eigen::Matrix<double, 3, 2> k = randomNormal<Eigen::Matrix<double, 3, 2>>(rng),
+                                    w = randomNormal<Eigen::Matrix<double, 3, 2>>(rng);
+  const Eigen::Matrix2d g = randomNormal<Eigen::Matrix2d>(rng), psi = randomNormal<Eigen::Matrix2d>(rng);
   const Eigen::Matrix<double, 5, 5> before = widenedInCorrect.committed();
   ASSERT_TRUE(widenedInCorrect.correct(h, k, g, psi, w, Eigen::Matrix2d::Identity(), &widening));
   ASSERT_TRUE(widenedAtStart.correct(h, k, g, psi, w, Eigen::Matrix2d::Identity(), nullptr));

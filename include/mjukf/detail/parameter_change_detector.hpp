@@ -9,7 +9,6 @@
 #include <cmath>
 #include <limits>
 
-#include <Eigen/Cholesky>
 #include <Eigen/Core>
 
 #include "mjukf/detail/linear_algebra.hpp"
@@ -94,11 +93,11 @@ class ParameterChangeDetector {
     w.information.noalias() += whitenedSensitivity.transpose() * whitenedSensitivity;
     ++w.count;
     if (Scalar(w.count) < std::max(minimumCount, threshold_) || !allFinite(w.score)) return false;
-    // LDLT, whose solve leaves out a zero pivot: a parameter the measurements do not move has gⱼ = 0 and
-    // a zero row in V and I, and drops out of the test instead of blocking it.
-    w.statistic = w.score.dot(w.scoreCovariance.ldlt().solve(w.score));  // z = sᵀ V⁻¹ s
+    Param solved;
+    if (!solveSemidefinite(w.scoreCovariance, w.score, solved)) return false;
+    w.statistic = w.score.dot(solved);  // z = sᵀ V⁻¹ s
     if (!(w.statistic > threshold_)) return false;
-    change = w.information.ldlt().solve(w.score);  // δ̂ = I⁻¹ s
+    if (!solveSemidefinite(w.information, w.score, change)) return false;  // δ̂ = I⁻¹ s
     if (!allFinite(change)) return false;
     clearWindow(w);
     ++w.changes;
@@ -121,6 +120,22 @@ class ParameterChangeDetector {
   Scalar threshold() const { return threshold_; }
 
  private:
+  // x = (A + δ I)⁻¹ b for a positive semi-definite A, δ = p ε tr A: a parameter the measurements do not
+  // move has gⱼ = 0, a zero row in V and I and a zero entry in s, and so drops out of the test (its x is
+  // 0) instead of blocking the factorisation. False when A is zero or not finite.
+  static bool solveSemidefinite(const ParamMatrix& a, const Param& b, Param& x) {
+    const Scalar trace = a.trace();
+    if (!(trace > Scalar(0)) || !std::isfinite(trace)) return false;
+    ParamMatrix regularised = a;
+    regularised.diagonal().array() += Scalar(P) * std::numeric_limits<Scalar>::epsilon() * trace;
+    ParamMatrix factor;
+    if (!choleskyLower(regularised, factor)) return false;
+    x = b;
+    solveLowerInPlace(factor, x);
+    solveUpperInPlace(factor, x);
+    return true;
+  }
+
   struct Window {
     Param score = Param::Zero();                        // s
     ParamMatrix scoreCovariance = ParamMatrix::Zero();  // V
