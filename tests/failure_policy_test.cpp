@@ -109,7 +109,10 @@ struct Snapshot {
                                                            k.measurementSensitivity().rows() + k.information().cols());
       automaticState << f.transformation(), f.scalings(), k.stateSensitivity().transpose(),
           k.measurementSensitivity().transpose(), k.information();
-      parameterCovariance = f.parameterCovariance();
+      const auto pt = f.parameterCovariance();           // copied by coefficient: g++ 12 warns (-Warray-bounds,
+      parameterCovariance.resize(pt.rows(), pt.cols());  // a false positive) on Eigen's packet copy of 1 × 1
+      for (Eigen::Index i = 0; i < pt.rows(); ++i)
+        for (Eigen::Index j = 0; j < pt.cols(); ++j) parameterCovariance(i, j) = pt(i, j);
       detectedChanges = f.detectedParameterChanges();
     }
     if constexpr (IsDual<Filter>::value) {
