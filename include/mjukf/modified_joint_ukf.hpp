@@ -330,8 +330,8 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
         // The easing's first ramp: a tenth of the memory with the parameters' uncertainty in the
         // state's covariance, a fiftieth without it (docs/tuning-mjukf.md, "Easing in").
         const Scalar easing = s.parameterUncertaintyInState ? Scalar(0.1) : Scalar(0.02);
-        if (!sensitivity_.correct(c.priorMean, parameters_, measure, c.gainFactor, c.innovationFactor, memory, updates,
-                                  easing, c.present))
+        if (!sensitivity_.correct(c.priorMean, parameters_, nominalMeasurement_, measure, c.gainFactor,
+                                  c.innovationFactor, memory, updates, easing, c.present))
           return Status::NonFiniteResult;
       }
     }
@@ -405,12 +405,13 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   }
 
  private:
-  // H = ∂g/∂x at (x̂⁻, θ̂) by forward differences, one measurement per state, zero rows for missing
-  // components; and ν = y − g(x̂⁻, θ̂) about the same point, zero there.
+  // g(x̂⁻, θ̂), and H = ∂g/∂x there by forward differences, one measurement per state, zero rows for
+  // missing components.
   template <class Correction>
   void measurementJacobianAt(const Correction& c) {
     const Scalar root = std::sqrt(std::numeric_limits<Scalar>::epsilon());
-    const Meas nominal = measureModel(c.model, State(c.priorMean), c.input, parameters_);
+    nominalMeasurement_ = measureModel(c.model, State(c.priorMean), c.input, parameters_);
+    const Meas& nominal = nominalMeasurement_;
     const auto& prior = errorCovariance_.committed();  // the prediction, committed by the time update
     for (int i = 0; i < StateDim; ++i) {
       Scalar size = std::max(std::abs(c.priorMean(i)), std::sqrt(std::abs(prior(i, i))));
@@ -419,13 +420,9 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
       moved(i) += root * size;
       measurementJacobian_.col(i) = (measureModel(c.model, moved, c.input, parameters_) - nominal) / (root * size);
     }
-    nominalInnovation_ = c.y - nominal;
     if (c.present)
       for (int j = 0; j < MeasDim; ++j)
-        if (!(*c.present)(j)) {
-          measurementJacobian_.row(j).setZero();
-          nominalInnovation_(j) = Scalar(0);  // y(j) may be NaN: overwrite
-        }
+        if (!(*c.present)(j)) measurementJacobian_.row(j).setZero();
   }
 
   // The joint covariance's gain of θ (docs/algorithms.md §5.3) into parameterGain_, after the test for a
@@ -440,7 +437,10 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
       return false;
     whitenedSensitivity_ = psi;
     detail::solveLowerInPlace(jointInnovationFactor_, whitenedSensitivity_);  // L⁻¹ ψ
-    Meas whitenedInnovation = nominalInnovation_;
+    Meas whitenedInnovation = c.y - nominalMeasurement_;                      // ν about (x̂⁻, θ̂)
+    if (c.present)
+      for (int j = 0; j < MeasDim; ++j)
+        if (!(*c.present)(j)) whitenedInnovation(j) = Scalar(0);            // y(j) may be NaN: overwrite
     detail::solveLowerInPlace(jointInnovationFactor_, whitenedInnovation);  // L⁻¹ ν
     // Tested once the easing's first ramp is over, on a window of at least a tenth of the memory.
     Param change;
@@ -505,13 +505,14 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<typename Est::Matrix, 9> stateErrorCovariance_{Est::Matrix::Zero()};
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<bool, 10> coversParameterError_{false};
   // The gain of θ of the update in progress (p × m), and the joint covariance's workspace for it: S's
-  // factor L, L⁻¹ ψ, ν about (x̂⁻, θ̂), and P_θ's widening on a detected change (and whether it applies).
+  // factor L, L⁻¹ ψ, g(x̂⁻, θ̂) (shared with the sensitivities), and P_θ's widening on a detected change (and whether it
+  // applies).
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<Transformation, 12> parameterGain_{Transformation::Zero()};
   using MeasMatrix = Eigen::Matrix<Scalar, MeasDim, MeasDim>;
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<MeasMatrix, 13> jointInnovationFactor_{MeasMatrix::Zero()};
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<typename Sensitivity::MeasSensitivity, 14> whitenedSensitivity_{
       Sensitivity::MeasSensitivity::Zero()};
-  MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<Meas, 15> nominalInnovation_{Meas::Zero()};
+  MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<Meas, 15> nominalMeasurement_{Meas::Zero()};  // g(x̂⁻, θ̂)
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<ParamMatrix, 16> widening_{ParamMatrix::Zero()};
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<bool, 17> widened_{false};
   // The test for a change tests a window of at least this share of the memory (docs/algorithms.md §5.4).

@@ -136,8 +136,8 @@ class ParameterSensitivity {
     sinceCorrection_ += interval;
   }
 
-  /// Measurement update about the prior (x̂⁻, θ̂), with g the model's measurement: ψ by forward
-  /// differences of g along (W⁻ᵣ, eᵣ), zero on missing components; W ← W⁻ − K ψ; the information
+  /// Measurement update about the prior (x̂⁻, θ̂), with g the model's measurement and `nominal` =
+  /// g(x̂⁻, θ̂): ψ by forward differences of g along (W⁻ᵣ, eᵣ), zero on missing components; W ← W⁻ − K ψ; the information
   /// I ← λ I + (1 − λ) I₀ + ψᵀ P_yy⁻¹ ψ (the prior I₀ is never forgotten) with the forgetting
   /// λ = max(exp(−Δt / memory), exp(−1 / minimumUpdates)), Δt the time since the last correction (a
   /// memory of `memory` time units, and of at least `minimumUpdates` updates however long the
@@ -147,14 +147,13 @@ class ParameterSensitivity {
   /// that K ψ = U (S⁻¹ ψ) (detail/unscented_engine.hpp). Returns false (candidates unspecified) when a
   /// result is not finite.
   template <class Measure, class WhitenedCross>
-  bool correct(const State& priorMean, const Param& theta, Measure&& measure, const WhitenedCross& whitenedCross,
-               const MeasMatrix& innovationFactor, Scalar memory, Scalar minimumUpdates, Scalar easing,
-               const MeasurementMask<M>* present) {
+  bool correct(const State& priorMean, const Param& theta, const Meas& nominal, Measure&& measure,
+               const WhitenedCross& whitenedCross, const MeasMatrix& innovationFactor, Scalar memory,
+               Scalar minimumUpdates, Scalar easing, const MeasurementMask<M>* present) {
     candidateState_ = state_;
     if (stale_) {
       candidateMeasurement_ = measurement_;
     } else {
-      const Meas nominal = measure(priorMean, theta);
       const Scalar output = nominal.cwiseAbs().maxCoeff();
       for (int r = 0; r < P; ++r) {
         const Scalar delta = step(theta, r, output);

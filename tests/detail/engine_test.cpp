@@ -129,21 +129,15 @@ TYPED_TEST(EngineEstimate, AFloorRaisesThePredictionToCoverItAndNoMore) {
   EXPECT_GE(mixed, 10) << "too few floors neither below nor above the prediction to test the general case";
 }
 
-// A fixed-size matrix with standard normal entries.
-template <class Matrix>
-Matrix randomNormal(std::mt19937_64& rng) {
-  std::normal_distribution<double> normal;
-  Matrix m;
-  for (int i = 0; i < m.rows(); ++i)
-    for (int j = 0; j < m.cols(); ++j) m(i, j) = normal(rng);
-  return m;
-}
+using mjukf::testing::randomNormal;
 
 // A joint covariance J of (η, e) with cross-covariances: random P₀ and P_θ, then a measurement update of
 // random gains (not yet committed).
 bool startCorrelated(std::mt19937_64& rng, mjukf::detail::ParameterErrorCovariance<double, 3, 2, 2>& covariance) {
-  covariance.start(mjukf::testing::randomCovariance<3>(rng), mjukf::testing::randomCovariance<2>(rng));
-  const auto h = randomNormal<Eigen::Matrix<double, 2, 3>>(rng);  // drawn in order: arguments are not
+  const auto stateCovariance = mjukf::testing::randomCovariance<3>(rng);      // drawn in order: arguments
+  const auto parameterCovariance = mjukf::testing::randomCovariance<2>(rng);  // are not
+  covariance.start(stateCovariance, parameterCovariance);
+  const auto h = randomNormal<Eigen::Matrix<double, 2, 3>>(rng);
   const auto k = randomNormal<Eigen::Matrix<double, 3, 2>>(rng);
   const auto g = randomNormal<Eigen::Matrix2d>(rng);
   const auto psi = randomNormal<Eigen::Matrix2d>(rng);

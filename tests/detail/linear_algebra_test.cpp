@@ -164,10 +164,7 @@ TEST(LinearAlgebra, FinitenessChecks) {
 template <int N>
 void expectPositivePartMatchesEigen(std::mt19937_64& rng) {
   using Matrix = Eigen::Matrix<double, N, N>;
-  std::normal_distribution<double> normal(0.0, 1.0);
-  Matrix a;
-  for (int i = 0; i < N; ++i)
-    for (int j = 0; j < N; ++j) a(i, j) = normal(rng);
+  Matrix a = mjukf::testing::randomNormal<Matrix>(rng);
   a = (a + a.transpose()).eval();  // indefinite, in general
   Matrix e;
   ASSERT_TRUE(mjukf::detail::positivePartFactor(a, e));

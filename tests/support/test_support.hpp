@@ -58,13 +58,20 @@ struct CountingStepper {
   }
 };
 
+/// A fixed-size matrix of independent standard normal entries, drawn row by row.
+template <class Matrix>
+Matrix randomNormal(std::mt19937_64& rng) {
+  std::normal_distribution<double> normal;
+  Matrix m;
+  for (int i = 0; i < m.rows(); ++i)
+    for (int j = 0; j < m.cols(); ++j) m(i, j) = normal(rng);
+  return m;
+}
+
 /// A random symmetric positive definite matrix with correlations, condition number moderate.
 template <int N>
 Eigen::Matrix<double, N, N> randomCovariance(std::mt19937_64& rng, double scale = 1.0) {
-  std::normal_distribution<double> normal;
-  Eigen::Matrix<double, N, N> factor;
-  for (int r = 0; r < N; ++r)
-    for (int c = 0; c < N; ++c) factor(r, c) = normal(rng);
+  const auto factor = randomNormal<Eigen::Matrix<double, N, N>>(rng);
   return scale * (factor * factor.transpose() + 0.1 * Eigen::Matrix<double, N, N>::Identity());
 }
 
