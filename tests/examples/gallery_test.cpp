@@ -74,8 +74,9 @@ TEST(Gallery, ShortStudyOfEachPlant) {
     ASSERT_EQ(rows.size(), 1u + 2 * 3) << plant.slug;
     // seed, filter, scenario; 2 RMSEs; 5; 2 finals; the final NEES of θ̂; the health at the end; the
     // updates from a forced fault to the first alarm; the first alarm, the blocks and the alarmed ones;
-    // the final relative error, the largest correlation of the final covariance of θ̂ and its 2 σ
-    ASSERT_EQ(rows[0].size(), 3u + 2 + 5 + 2 + 1 + 1 + 1 + 3 + 2 + 2) << plant.slug;
+    // the final relative error, the largest correlation of the final covariance of θ̂ and its 2 σ; the
+    // changes of θ the automatic MJUKF's test found
+    ASSERT_EQ(rows[0].size(), 3u + 2 + 5 + 2 + 1 + 1 + 1 + 3 + 2 + 2 + 1) << plant.slug;
     EXPECT_EQ(rows[1][0] + "," + rows[1][1], "1,jukf") << plant.slug;
     EXPECT_EQ(rows[1][5], "0") << plant.slug << ": JUKF diverged on seed 1";
     EXPECT_EQ(rows[1][6], "ok") << plant.slug;
@@ -151,6 +152,32 @@ TEST(Gallery, AForcedFaultIsFlaggedInTheFirstBlock) {
     EXPECT_EQ(rows[k][column("first_alarm")], rows[k][column("health")]) << k;
     EXPECT_NE(rows[k][column("alarmed_blocks")], "0") << k;
   }
+}
+
+// The dual UKF's σ of θ̂ is honest where the plant is the model it assumes (study --scenarios matched:
+// the data drawn with the filter's own Q, Q_θ and R, one time update per measurement interval): on the
+// DC motor measured by its angle alone (one output, two parameters of opposite-sign sensitivity), the
+// mean NEES of the final θ̂ over 50 seeds lies in the 95 % band of χ²(100) / 50, [74.22, 129.56] / 50
+// (docs/studies.md, "The plant as the filters model it"), and no run diverges.
+TEST(Gallery, TheDualsSigmaIsHonestWhereThePlantIsItsModel) {
+  const std::string dir = scratch("matched");
+  const Result r =
+      run(kGallery + " dc_motor study --seeds 1-50 --filters dual --scenarios matched --out-dir " + shellQuote(dir));
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  const auto rows = readCsv(dir + "/dc_motor_study.csv");
+  ASSERT_EQ(rows.size(), 51u);
+  const auto column = [&](const std::string& name) {
+    return std::size_t(std::find(rows[0].begin(), rows[0].end(), name) - rows[0].begin());
+  };
+  ASSERT_LT(column("nees"), rows[0].size());
+  double sum = 0;
+  for (std::size_t k = 1; k < rows.size(); ++k) {
+    EXPECT_EQ(rows[k][column("diverged")], "0") << k;
+    sum += std::stod(rows[k][column("nees")]);
+  }
+  const double mean = sum / 50;
+  EXPECT_GE(mean, 74.22 / 50);
+  EXPECT_LE(mean, 129.56 / 50);
 }
 
 }  // namespace

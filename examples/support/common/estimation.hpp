@@ -41,6 +41,10 @@ struct FilterSetup {
   using Model = typename Experiment::Model;
   FilterKind kind = FilterKind::ModifiedJointUkf;
   int measurementEvery = Experiment::measurementEvery;
+  /// The paper's schedule (false): the steps between measurements propagate the mean alone and the
+  /// time update covers the last step. True: one time update covers every step since the last
+  /// measurement (the covariance propagated over all of them), and the rows between hold the estimate.
+  bool wholeIntervalTimeUpdates = false;
   typename Model::State initialState = Experiment::initialState();
   /// θ̂₀ of the joint and dual filters; the fixed parameters of the UKF, which estimates none (the truth).
   typename Model::Param initialParameters = Experiment::initialParameters();
@@ -103,21 +107,51 @@ std::optional<Eigen::Matrix<typename Filter::Scalar, Filter::ParamDim, Filter::P
     return std::nullopt;
 }
 
+// The schedule of FilterSetup::wholeIntervalTimeUpdates: at each measurement row, one time update over
+// the `measurementEvery` steps since the last and the measurement update; every row records the
+// estimate then in force. A refused step stops the run there (a gated measurement goes on).
+template <class Filter, class MeasurementAt, class Record>
+paper::ScheduleOutcome wholeIntervalSchedule(Filter& filter, long rows, typename Filter::Scalar h, int measurementEvery,
+                                             MeasurementAt&& measurementAt, Record&& record) {
+  using Scalar = typename Filter::Scalar;
+  paper::ScheduleOutcome outcome;
+  if (rows < 1) return outcome;
+  record(0L, static_cast<const Filter&>(filter));
+  for (long k = 1; k < rows; ++k) {
+    if (k % measurementEvery == 0) {
+      Status status = filter.timeUpdate(Scalar(k - measurementEvery) * h, h, measurementEvery);
+      if (taken(status)) status = filter.measurementUpdate(measurementAt(k));
+      outcome.repairs += status == Status::Repaired;
+      outcome.rejected += status == Status::MeasurementRejected;
+      if (!taken(status) && status != Status::MeasurementRejected) {
+        outcome.status = status;
+        outcome.row = k;
+        return outcome;
+      }
+    }
+    record(k, static_cast<const Filter&>(filter));
+  }
+  outcome.row = rows - 1;
+  return outcome;
+}
+
 template <class Filter, class Model>
-EstimateRun<Model> runSchedule(Filter& filter, const PlantData<Model>& data, int measurementEvery) {
+EstimateRun<Model> runSchedule(Filter& filter, const PlantData<Model>& data, int measurementEvery,
+                               bool wholeIntervals = false) {
   EstimateRun<Model> run;
   // Filled with zeros here, so the pages are touched before the clock starts: left to the loop, their
   // first-touch page faults were part of a single run's loop_seconds.
   run.state.assign(data.y.size(), Model::State::Zero());
   run.parameters.assign(data.y.size(), Model::Param::Zero());
   const auto start = std::chrono::steady_clock::now();
-  run.outcome = paper::runSchedule(
-      filter, data.rows(), data.stepSize, measurementEvery,
-      [&](long k) -> const typename Model::Meas& { return data.y[static_cast<std::size_t>(k)]; },
-      [&](long k, const Filter& f) {
-        run.state[static_cast<std::size_t>(k)] = f.state();
-        run.parameters[static_cast<std::size_t>(k)] = f.parameters();
-      });
+  const auto measurementAt = [&](long k) -> const typename Model::Meas& { return data.y[static_cast<std::size_t>(k)]; };
+  const auto record = [&](long k, const Filter& f) {
+    run.state[static_cast<std::size_t>(k)] = f.state();
+    run.parameters[static_cast<std::size_t>(k)] = f.parameters();
+  };
+  run.outcome = wholeIntervals
+                    ? wholeIntervalSchedule(filter, data.rows(), data.stepSize, measurementEvery, measurementAt, record)
+                    : paper::runSchedule(filter, data.rows(), data.stepSize, measurementEvery, measurementAt, record);
   run.loopSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   run.finalParameterCovariance = parameterCovarianceOf(filter);
   run.health = filter.health();
@@ -144,20 +178,20 @@ EstimateRun<typename Experiment::Model> runFilter(const typename Experiment::Mod
   switch (setup.kind) {
     case FilterKind::Ukf: {
       Ukf<Model, Integrator> filter(model, setup.initialState, setup.initialParameters, setup.ukf);
-      return detail::runSchedule(filter, data, setup.measurementEvery);
+      return detail::runSchedule(filter, data, setup.measurementEvery, setup.wholeIntervalTimeUpdates);
     }
     case FilterKind::JointUkf: {
       JointUkf<Model, Integrator> filter(model, setup.initialState, setup.initialParameters, setup.jointUkf);
-      return detail::runSchedule(filter, data, setup.measurementEvery);
+      return detail::runSchedule(filter, data, setup.measurementEvery, setup.wholeIntervalTimeUpdates);
     }
     case FilterKind::ModifiedJointUkf: {
       ModifiedJointUkf<Model, Integrator> filter(model, setup.initialState, setup.initialParameters,
                                                  setup.modifiedJointUkf);
-      return detail::runSchedule(filter, data, setup.measurementEvery);
+      return detail::runSchedule(filter, data, setup.measurementEvery, setup.wholeIntervalTimeUpdates);
     }
     case FilterKind::DualUkf: {
       DualUkf<Model, Integrator> filter(model, setup.initialState, setup.initialParameters, setup.dualUkf);
-      return detail::runSchedule(filter, data, setup.measurementEvery);
+      return detail::runSchedule(filter, data, setup.measurementEvery, setup.wholeIntervalTimeUpdates);
     }
   }
   throw std::logic_error("unknown filter kind");

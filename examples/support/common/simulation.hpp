@@ -5,8 +5,11 @@
 // σ = sqrt(var(all states) / 10^(SNR/10)), the variance taken over every channel and sample together.
 // The 2019 systems (paper/systems_2019.hpp) are integrated with their own integrator and take
 // noise relative to the signal instead: std ρ·|yᵢ| for each component of each sample. The gallery's
-// plants (gallery/experiments.hpp) give an absolute standard deviation per measured component.
+// plants (gallery/experiments.hpp) give an absolute standard deviation per measured component. Without
+// process noise, the plant follows its model exactly; with it (`SimulationOptions::processNoise`, the
+// study's `matched` scenario), it follows the model a filter assumes (docs/studies.md).
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -36,6 +39,38 @@ inline void requireSimulationDuration(const char* flag, double duration, double 
   throw UsageError(flag + std::string(limit));
 }
 
+/// Process noise of a simulated plant, as a filter's time update assumes it: after every `every` steps
+/// (one measurement interval), w ~ N(0, `state`) is added to the state and the parameters take a
+/// random-walk step N(0, `parameters`), both in force from that row on.
+template <class Model>
+struct ProcessNoise {
+  int every = 1;
+  Eigen::Matrix<double, Model::StateDim, Model::StateDim> state =
+      Eigen::Matrix<double, Model::StateDim, Model::StateDim>::Zero();
+  Eigen::Matrix<double, Model::ParamDim, Model::ParamDim> parameters =
+      Eigen::Matrix<double, Model::ParamDim, Model::ParamDim>::Zero();
+};
+
+/// L lower triangular with L Lᵀ = C, for C symmetric positive semi-definite and possibly singular (a
+/// state without process noise): Cholesky's columns, with a zero column where the pivot is not positive
+/// (of a semi-definite C, that column's entries below it are zero too).
+template <class Matrix>
+Matrix semidefiniteCholesky(const Matrix& c) {
+  Matrix l = Matrix::Zero();
+  for (int j = 0; j < c.rows(); ++j) {
+    double pivot = c(j, j);
+    for (int k = 0; k < j; ++k) pivot -= l(j, k) * l(j, k);
+    if (!(pivot > 0)) continue;
+    l(j, j) = std::sqrt(pivot);
+    for (int i = j + 1; i < c.rows(); ++i) {
+      double sum = c(i, j);
+      for (int k = 0; k < j; ++k) sum -= l(i, k) * l(j, k);
+      l(i, j) = sum / l(j, j);
+    }
+  }
+  return l;
+}
+
 template <class Model>
 struct SimulationOptions {
   double duration = 0;  ///< s; rows = round(duration / h) + 1
@@ -47,7 +82,13 @@ struct SimulationOptions {
   std::optional<typename Model::Meas> absoluteNoise;
   typename Model::State initialState = Model::State::Zero();
   TrueParameters<typename Model::Param> parameters{Model::trueParameters()};
+  /// Given: process noise on the state and the parameters (none otherwise), drawn from a stream of
+  /// its own, so that the measurement noise of a seed is the same draws with and without it.
+  std::optional<ProcessNoise<Model>> processNoise;
 };
+
+/// The process noise's stream: `seed` xor this.
+constexpr std::uint64_t kProcessNoiseStream = 0x9e3779b97f4a7c15u;
 
 /// The noise standard deviation for signal `states` at `snrDb` (docs/plants.md §4).
 template <class State>
@@ -73,6 +114,45 @@ typename Model::Input inputAt(const Model& model, double t) {
     return typename Model::Input();
 }
 
+/// The plant of `options` integrated one measurement interval at a time, w added to the state and the
+/// parameters' walk taken at the end of each (ProcessNoise); the state at that row is the one after w,
+/// which the row's measurement sees; `data.parameterTruth` (the scheduled parameters on entry) gains
+/// the walk from that row on.
+template <class Model, class Integrator>
+void simulateWithProcessNoise(const Model& model, const Integrator& integrator, const SimulationOptions<Model>& options,
+                              PlantData<Model>& data) {
+  using State = typename Model::State;
+  using Param = typename Model::Param;
+  const ProcessNoise<Model>& noise = *options.processNoise;
+  if (noise.every < 1) throw std::invalid_argument("simulatePlant: process noise every < 1 step");
+  const auto stateRoot = semidefiniteCholesky(noise.state);
+  const auto parameterRoot = semidefiniteCholesky(noise.parameters);
+  std::mt19937_64 random(options.seed ^ kProcessNoiseStream);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const auto draw = [&](auto vector) {
+    for (int i = 0; i < vector.size(); ++i) vector(i) = normal(random);
+    return vector;
+  };
+  const long rows = static_cast<long>(data.stateTruth.size());
+  Param walk = Param::Zero();
+  State x = options.initialState;
+  data.stateTruth.front() = x;
+  for (long start = 0; start < rows - 1; start += noise.every) {
+    const long steps = std::min<long>(noise.every, rows - 1 - start);
+    const auto row = [start](long k) { return static_cast<std::size_t>(start + k); };
+    x = mjukf::simulate(
+        model, integrator, x, [&](long k) -> const Param& { return data.parameterTruth[row(k)]; },
+        double(start) * options.stepSize, options.stepSize, steps,
+        [&](long k, double, const State& xk) { data.stateTruth[row(k)] = xk; });
+    if (steps < noise.every) break;  // the last, partial interval: no time update ends it
+    x += stateRoot * draw(State());
+    walk += parameterRoot * draw(Param());
+    data.stateTruth[row(steps)] = x;
+    for (long k = start + steps; k < rows && k < start + steps + noise.every; ++k)
+      data.parameterTruth[static_cast<std::size_t>(k)] += walk;
+  }
+}
+
 /// The noise draws depend on `options.seed` alone (one standard normal per component and row, in
 /// row order), so a run is reproduced from its seed.
 template <class Model, class Integrator = ITrBdf2<double>>
@@ -92,10 +172,14 @@ PlantData<Model> simulatePlant(const Model& model, const SimulationOptions<Model
   data.parameterTruth.resize(static_cast<std::size_t>(rows));
   for (long k = 0; k < rows; ++k) data.parameterTruth[static_cast<std::size_t>(k)] = options.parameters.atRow(k, h);
   // The step from t_k runs with the parameters in force at t_k; the input is evaluated at each stage.
-  mjukf::simulate(
-      model, integrator, options.initialState,
-      [&](long k) -> const Param& { return data.parameterTruth[static_cast<std::size_t>(k)]; }, 0.0, h, rows - 1,
-      [&](long k, double, const State& x) { data.stateTruth[static_cast<std::size_t>(k)] = x; });
+  if (!options.processNoise) {
+    mjukf::simulate(
+        model, integrator, options.initialState,
+        [&](long k) -> const Param& { return data.parameterTruth[static_cast<std::size_t>(k)]; }, 0.0, h, rows - 1,
+        [&](long k, double, const State& x) { data.stateTruth[static_cast<std::size_t>(k)] = x; });
+  } else {
+    simulateWithProcessNoise(model, integrator, options, data);
+  }
 
   const bool relative = options.relativeNoise > 0;
   const bool absolute = options.absoluteNoise.has_value();

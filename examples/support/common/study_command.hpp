@@ -160,6 +160,10 @@ struct StudyScenario {
   double measurementGain = 1;
   double processNoiseScale = 1;
   double faultAt = std::numeric_limits<double>::quiet_NaN();
+  /// The plant as the filters model it (`matched`): the data drawn with the dual UKF's preset Q of the
+  /// state and Q_θ per measurement interval and its R, and every filter given that Q, Q_θ and R, with
+  /// one time update over each whole measurement interval (FilterSetup::wholeIntervalTimeUpdates).
+  bool matchedNoise = false;
 };
 
 /// The forced scenarios' sizes: a jump of every parameter by a quarter of its value halfway through,
@@ -193,6 +197,8 @@ std::vector<StudyScenario<typename Plant::Param>> studyScenarios() {
   scenarios.back().measurementGain = kForcedSensorGain;
   scenarios.push_back(forced("small-q", 0));
   scenarios.back().processNoiseScale = kForcedProcessNoiseScale;
+  scenarios.push_back(forced("matched", std::numeric_limits<double>::quiet_NaN()));
+  scenarios.back().matchedNoise = true;
   return scenarios;
 }
 
@@ -260,10 +266,25 @@ FilterSetup<Experiment> studySetup(const StudyFilter& filter, const StudyScenari
   if (scenario.parameterProcessNoise)
     setup.dualUkf.parameterProcessNoise.diagonal().setConstant(*scenario.parameterProcessNoise);
   constexpr int n = Experiment::Model::StateDim;
+  constexpr int p = Experiment::Model::ParamDim;
   setup.ukf.processNoise *= scenario.processNoiseScale;
   setup.jointUkf.processNoise.template topLeftCorner<n, n>() *= scenario.processNoiseScale;
   setup.modifiedJointUkf.processNoise *= scenario.processNoiseScale;
   setup.dualUkf.processNoise *= scenario.processNoiseScale;
+  if (scenario.matchedNoise) {
+    setup.wholeIntervalTimeUpdates = true;     // Q per time update covers the interval, as the data's w
+    const auto plant = Experiment::dualUkf();  // the noise the data is drawn with (matchNoise)
+    setup.ukf.processNoise = plant.processNoise;
+    setup.ukf.measurementNoise = plant.measurementNoise;
+    setup.jointUkf.processNoise.template topLeftCorner<n, n>() = plant.processNoise;
+    setup.jointUkf.processNoise.template bottomRightCorner<p, p>() = plant.parameterProcessNoise;
+    setup.jointUkf.measurementNoise = plant.measurementNoise;
+    setup.modifiedJointUkf.processNoise = plant.processNoise;
+    setup.modifiedJointUkf.measurementNoise = plant.measurementNoise;
+    setup.dualUkf.processNoise = plant.processNoise;
+    setup.dualUkf.parameterProcessNoise = plant.parameterProcessNoise;
+    setup.dualUkf.measurementNoise = plant.measurementNoise;
+  }
   if constexpr (HasAutomaticModes<decltype(setup.modifiedJointUkf)>::value) {
     if (filter.automatic) {
       setup.modifiedJointUkf.automaticTransformation = true;
@@ -271,6 +292,20 @@ FilterSetup<Experiment> studySetup(const StudyFilter& filter, const StudyScenari
     }
   }
   return setup;
+}
+
+/// The `matched` scenario's data: the plant with the dual UKF preset's noise, Q and Q_θ per measurement
+/// interval and R as independent noise of each measured component (its diagonal: every preset's R is
+/// diagonal).
+template <class Experiment>
+void matchNoise(SimulationOptions<typename Experiment::Model>& options) {
+  const auto plant = Experiment::dualUkf();
+  ProcessNoise<typename Experiment::Model> noise;
+  noise.every = Experiment::measurementEvery;
+  noise.state = plant.processNoise.template cast<double>();
+  noise.parameters = plant.parameterProcessNoise.template cast<double>();
+  options.processNoise = noise;
+  options.absoluteNoise = plant.measurementNoise.diagonal().cwiseSqrt();
 }
 
 /// Runs work(0) … work(count − 1) on `jobs` threads, calling progress(done) about once a second from
@@ -405,6 +440,7 @@ int studyCommand(const std::vector<std::string>& words) {
         const auto& scenario = scenarios[r / seeds.size()];
         auto options = experimentSimulation<Experiment>(seeds[r % seeds.size()], scenario.truth);
         options.duration = args.has("--duration") ? args.number("--duration", 0) : scenario.duration;
+        if (scenario.matchedNoise) detail::matchNoise<Experiment>(options);
         auto data = simulateExperiment<Experiment>(options);
         for (auto& y : data.y) y *= scenario.measurementGain;
         const long rmseFrom = Experiment::rmseFromRow < data.rows() ? Experiment::rmseFromRow : 0;
