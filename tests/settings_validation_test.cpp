@@ -173,6 +173,30 @@ TEST(SettingsValidation, ModifiedJointSignedTransformationAndPerParameterScaling
                          "parameterSpread");
 }
 
+// The MJUKF's Q_θ (parameterProcessNoise): symmetric positive semi-definite, and zero where the filter
+// does not follow the covariance of θ̂ (the paper preset: a Q_θ there would change nothing, so it is
+// refused by name rather than ignored).
+TEST(SettingsValidation, ModifiedJointParameterProcessNoise) {
+  expectModifiedRejected([](auto& s) { s.parameterProcessNoise(0, 0) = 1e-6; }, "parameterProcessNoise");
+  const auto followed = [](auto& s) { s.followParameterCovariance = true; };
+  expectModifiedRejected(
+      [&](auto& s) {
+        followed(s);
+        s.parameterProcessNoise(0, 0) = -1e-6;
+      },
+      "parameterProcessNoise");
+  expectModifiedRejected(
+      [&](auto& s) {
+        followed(s);
+        s.parameterProcessNoise(0, 1) = 1e-6;  // not symmetric
+      },
+      "parameterProcessNoise");
+  auto s = Robot::modifiedJointUkf();
+  followed(s);
+  s.parameterProcessNoise.diagonal().setConstant(1e-6);
+  EXPECT_FALSE(mjukf::ModifiedJointUkf<Robot::Model>::validate(Robot::initialState(), Robot::initialParameters(), s));
+}
+
 TEST(SettingsValidation, InitialValuesMustBeFinite) {
   Robot::State x0 = Robot::initialState();
   x0(2) = kNan;

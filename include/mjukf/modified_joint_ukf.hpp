@@ -75,6 +75,8 @@ struct ModifiedJointUkfSettings : ParameterEstimationSettings<Scalar_, StateDim,
   using Param = Eigen::Matrix<Scalar, ParamDim, 1>;
   /// The type of T (p × m).
   using Transformation = Eigen::Matrix<Scalar, ParamDim, MeasDim>;
+  /// A p × p matrix (Q_θ).
+  using ParamMatrix = Eigen::Matrix<Scalar, ParamDim, ParamDim>;
   /// ξ of eq. 9, one per parameter: θᵢ ← θ̂ − diag(ξ) T (y − Yᵢ). One number sets every parameter's
   /// (the paper's scalar ξ). Sign: θ̂ᵣ approaches the truth when ξᵣ (T ψ)ᵣᵣ < 0, ψ = ∂ŷ/∂θ̂ through the
   /// dynamics; with a row of T ≥ 0, ξᵣ is negative when the measurements rise with the parameter (the
@@ -143,6 +145,14 @@ struct ModifiedJointUkfSettings : ParameterEstimationSettings<Scalar_, StateDim,
   /// of the memory. false: the state's covariance holds what its own sigma points and θᵢ carry alone,
   /// and the easing takes a fiftieth (the automatic MJUKF before this setting).
   bool parameterUncertaintyInState = true;
+  /// Q_θ, a random walk of the parameters per time update, symmetric positive semi-definite; only where
+  /// the filter follows the covariance of θ̂ (`followParameterCovariance` or an automatic mode), zero
+  /// otherwise. It widens that covariance at every time update, and with it the joint covariance's gain
+  /// of θ, so that `parameterCovariance()` covers parameters that drift (docs/algorithms.md §5.1). Zero
+  /// (the default): θ taken as constant, and a covariance too small for parameters that do drift
+  /// (docs/studies.md, "The plant as the filters model it"). As JUKF's Q_θ: the square of how much each
+  /// parameter may change per time update.
+  ParamMatrix parameterProcessNoise = ParamMatrix::Zero();
 };
 
 /// \cond INTERNAL
@@ -283,10 +293,10 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
                            [&](const State& x, const Param& theta) { return step.propagate(theta, x); });
     else
       sensitivity_.keepPrediction(step.interval());
-    const bool found = errorCovariance_.predict(priorPoints_, points, parameterPoints_, before,
-                                                refreshDue ? &sensitivity_.derivative() : nullptr,
-                                                sensitivity_.candidateStateSensitivity(), step.settings.processNoise,
-                                                refreshDue ? sensitivity_.extrapolation() : Scalar(1));
+    const bool found = errorCovariance_.predict(
+        priorPoints_, points, parameterPoints_, before, refreshDue ? &sensitivity_.derivative() : nullptr,
+        sensitivity_.candidateStateSensitivity(), step.settings.processNoise, step.settings.parameterProcessNoise,
+        refreshDue ? sensitivity_.extrapolation() : Scalar(1));
     // The parameters' uncertainty in the state's covariance (docs/algorithms.md §5.2): P⁻ must cover
     // the covariance of η + W⁻ e that P_θ's prediction implies. A Σ that is finite but huge is passed on
     // as it is: the state's covariance then says so.
@@ -615,6 +625,14 @@ class ModifiedJointUkf
         !(std::isfinite(settings.minimumMemoryUpdates) && settings.minimumMemoryUpdates >= 1))
       return detail::invalid(kOwner, "minimumMemoryUpdates", "must be finite and >= 1 (measurement updates)");
     if (settings.sensitivityInterval < 0) return detail::invalid(kOwner, "sensitivityInterval", "must be >= 0");
+    if (SettingsError e =
+            detail::requirePositiveSemiDefinite(kOwner, "parameterProcessNoise", settings.parameterProcessNoise))
+      return e;
+    if (!(settings.followParameterCovariance || settings.automaticTransformation || settings.adaptiveScaling) &&
+        !settings.parameterProcessNoise.isZero(Scalar(0)))
+      return detail::invalid(kOwner, "parameterProcessNoise",
+                             "must be zero when the covariance of the parameters is not followed "
+                             "(followParameterCovariance false, both automatic modes off)");
     if (settings.adaptiveScaling && !(settings.parameterGain == ParameterGain::JointCovariance ||
                                       settings.parameterGain == ParameterGain::RecursiveLeastSquares))
       return detail::invalid(kOwner, "parameterGain", "must be JointCovariance or RecursiveLeastSquares");

@@ -165,6 +165,42 @@ TEST(ParameterErrorCovariance, TheStateErrorCovarianceIsThatOfEtaPlusWe) {
   EXPECT_TRUE(sigma == sigma.transpose());
 }
 
+// A random walk of θ in the joint covariance's prediction (ModifiedJointUkfSettings::parameterProcessNoise):
+// θ ← θ + w_θ at the end of the interval moves (η, e) by ([W⁻; −I] w_θ), so the prediction with Q_θ is
+// the one without it plus [W⁻; −I] Q_θ [W⁻; −I]ᵀ, from the same points. Tolerance: products of n + p
+// entries of size 1, to 64 ε of J's norm; with Q_θ = 0 the two are the same bits.
+TEST(ParameterErrorCovariance, ARandomWalkOfThetaWidensTheJointPredictionByItsImage) {
+  using Covariance = mjukf::detail::ParameterErrorCovariance<double, 3, 2, 2>;
+  std::mt19937_64 rng(11);
+  Covariance still, walking, zero;
+  ASSERT_TRUE(startCorrelated(rng, still));
+  still.commit();
+  walking = zero = still;
+  const auto prior = randomNormal<Covariance::Points>(rng);
+  const auto propagated = randomNormal<Covariance::Points>(rng);
+  const auto parameterPoints = randomNormal<Covariance::ParamPoints>(rng);
+  const auto sensitivity = randomNormal<Covariance::StateByParam>(rng);
+  const auto derivative = randomNormal<Covariance::StateByParam>(rng);
+  const auto predicted = randomNormal<Covariance::StateByParam>(rng);
+  const Eigen::Matrix3d q = mjukf::testing::randomCovariance<3>(rng);
+  const Eigen::Matrix2d walk = mjukf::testing::randomCovariance<2>(rng);
+  ASSERT_TRUE(still.predict(prior, propagated, parameterPoints, sensitivity, &derivative, predicted, q,
+                            Eigen::Matrix2d::Zero(), 1.0));
+  ASSERT_TRUE(walking.predict(prior, propagated, parameterPoints, sensitivity, &derivative, predicted, q, walk, 1.0));
+  ASSERT_TRUE(zero.predict(prior, propagated, parameterPoints, sensitivity, &derivative, predicted, q,
+                           Eigen::Matrix2d::Zero(), 1.0));
+  still.commit();
+  walking.commit();
+  zero.commit();
+  EXPECT_TRUE(zero.committed() == still.committed());
+  Eigen::Matrix<double, 5, 2> image;
+  image << predicted, -Eigen::Matrix2d::Identity();
+  const Eigen::Matrix<double, 5, 5> expected = still.committed() + image * walk * image.transpose();
+  EXPECT_LT((walking.committed() - expected).cwiseAbs().maxCoeff(),
+            64 * std::numeric_limits<double>::epsilon() * expected.norm());
+  EXPECT_TRUE(walking.parameterCovariance() == still.parameterCovariance() + walk);
+}
+
 // The joint covariance's gain of θ (docs/algorithms.md §5.3) is the Kalman gain of the augmented linear
 // model: with z = (η, e) of covariance J and ν = −[H ψ] z + v, θ − θ̂ = −e, K_θ = cov(−e, ν) S⁻¹. Against
 // that formula written out, for a general J (cross-covariances), with P_θ widened, and with a component

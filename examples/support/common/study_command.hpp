@@ -161,8 +161,9 @@ struct StudyScenario {
   double processNoiseScale = 1;
   double faultAt = std::numeric_limits<double>::quiet_NaN();
   /// The plant as the filters model it (`matched`): the data drawn with the dual UKF's preset Q of the
-  /// state and Q_θ per measurement interval and its R, and every filter given that Q, Q_θ and R, with
-  /// one time update over each whole measurement interval (FilterSetup::wholeIntervalTimeUpdates).
+  /// state and Q_θ per measurement interval and its R, and every filter given that Q, Q_θ (the MJUKF
+  /// where it follows the covariance of θ̂) and R, with one time update over each whole measurement
+  /// interval (FilterSetup::wholeIntervalTimeUpdates).
   bool matchedNoise = false;
 };
 
@@ -290,6 +291,10 @@ FilterSetup<Experiment> studySetup(const StudyFilter& filter, const StudyScenari
       setup.modifiedJointUkf.automaticTransformation = true;
       setup.modifiedJointUkf.adaptiveScaling = true;
     }
+    auto& mjukf = setup.modifiedJointUkf;  // its Q_θ, where it follows the covariance of θ̂ that Q_θ widens
+    if (scenario.matchedNoise &&
+        (mjukf.followParameterCovariance || mjukf.automaticTransformation || mjukf.adaptiveScaling))
+      mjukf.parameterProcessNoise = Experiment::dualUkf().parameterProcessNoise;
   }
   return setup;
 }

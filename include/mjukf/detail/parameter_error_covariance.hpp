@@ -53,10 +53,13 @@ class ParameterErrorCovariance {
   /// After open-loop propagations since the last time update, the sensitivities extrapolate W over them
   /// from this interval's D by `extrapolation` = (open-loop time + interval) / interval; A and B are
   /// extrapolated alike, I + x (A − I) and x B, so that W⁻ stays their image of W.
+  /// A random walk of θ by w_θ ~ N(0, `parameterProcessNoise`) at the end of the interval moves e by −w_θ
+  /// and η = x̂ − x − W⁻ e by W⁻ w_θ: J gains [W⁻; −I] Q_θ [W⁻; −I]ᵀ (none, to the bit, for Q_θ = 0).
   /// Returns false when A is not finite (the points collapsed); then the prediction is η⁻ = η − w.
   bool predict(const Points& prior, const Points& propagated, const ParamPoints& parameterPoints,
                const StateByParam& sensitivity, const StateByParam* derivative,
-               const StateByParam& predictedSensitivity, const StateMatrix& processNoise, Scalar extrapolation) {
+               const StateByParam& predictedSensitivity, const StateMatrix& processNoise,
+               const ParamMatrix& parameterProcessNoise, Scalar extrapolation) {
     for (int j = 0; j < N; ++j) {
       spread_.col(j) = (prior.col(1 + j) - prior.col(1 + N + j)) * Scalar(0.5);
       change_.col(j) = (propagated.col(1 + j) - propagated.col(1 + N + j)) * Scalar(0.5);
@@ -85,6 +88,13 @@ class ParameterErrorCovariance {
     spreadJoint_.noalias() = transition_ * joint_;
     candidate_.noalias() = spreadJoint_ * transition_.transpose();
     candidate_.template topLeftCorner<N, N>() += processNoise;
+    if (!parameterProcessNoise.isZero(Scalar(0))) {
+      const StateByParam walk = predictedSensitivity * parameterProcessNoise;  // W⁻ Q_θ
+      candidate_.template topLeftCorner<N, N>().noalias() += walk * predictedSensitivity.transpose();
+      candidate_.template topRightCorner<N, P>() -= walk;
+      candidate_.template bottomLeftCorner<P, N>() -= walk.transpose();
+      candidate_.template bottomRightCorner<P, P>() += parameterProcessNoise;
+    }
     return found;
   }
 
