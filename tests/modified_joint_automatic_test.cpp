@@ -382,6 +382,35 @@ TEST(AutomaticModes, OffTheNewSettingsChangeNothing) {
   EXPECT_NE(paper.parameters()(0), Tank::initialParameters()(0)) << "the run did move the parameter";
 }
 
+// Q_θ (parameterProcessNoise) reaches the covariance of θ̂ the filter follows: a time update leaves P_θ
+// as it was but for Q_θ (θ does not move in it: docs/algorithms.md §5.1), with both automatic modes and
+// with followParameterCovariance alone; Q_θ = 0 leaves it exactly. Tolerance: P_θ is the lower-right block
+// of T J Tᵀ, whose rows for θ are (0, I): sums of products with exact zeros, to a few ε of P_θ.
+TEST(AutomaticModes, TheParameterWalkWidensTheParameterCovarianceAtEachTimeUpdate) {
+  Eigen::Matrix2d walk;
+  walk << 4e-6, 1e-6, 1e-6, 9e-6;
+  auto followed = Robot::modifiedJointUkf();
+  followed.followParameterCovariance = true;
+  for (const auto& base : {automatic(Robot::modifiedJointUkf()), followed}) {
+    auto s = base;
+    s.parameterProcessNoise = walk;
+    mjukf::ModifiedJointUkf<Robot::Model> walking(Robot::Model(), Robot::initialState(), Robot::initialParameters(), s);
+    mjukf::ModifiedJointUkf<Robot::Model> still(Robot::Model(), Robot::initialState(), Robot::initialParameters(),
+                                                base);
+    const Robot::Model::Meas y = Robot::Model::Meas::Constant(0.01);
+    for (int k = 0; k < 5; ++k) {
+      const Eigen::Matrix2d before = walking.parameterCovariance(), beforeStill = still.parameterCovariance();
+      ASSERT_EQ(walking.timeUpdate(k * Robot::stepSize, Robot::stepSize), Status::Ok);
+      ASSERT_EQ(still.timeUpdate(k * Robot::stepSize, Robot::stepSize), Status::Ok);
+      const double tol = 8 * std::numeric_limits<double>::epsilon() * before.norm();
+      EXPECT_LT((walking.parameterCovariance() - (before + walk)).cwiseAbs().maxCoeff(), tol) << k;
+      EXPECT_LT((still.parameterCovariance() - beforeStill).cwiseAbs().maxCoeff(), tol) << k;
+      ASSERT_TRUE(mjukf::taken(walking.measurementUpdate(y)));
+      ASSERT_TRUE(mjukf::taken(still.measurementUpdate(y)));
+    }
+  }
+}
+
 // The gallery's predator–prey (docs/studies.md): the prey counted, the predators guessed 2.5 times too
 // few, both parameters in the predators' equation, the gallery's settings rule. Without the parameters'
 // uncertainty in the state's covariance (docs/algorithms.md §5.2) the filter pulled δ̂ to its bound within

@@ -199,6 +199,13 @@ TEST(ParameterErrorCovariance, ARandomWalkOfThetaWidensTheJointPredictionByItsIm
   EXPECT_LT((walking.committed() - expected).cwiseAbs().maxCoeff(),
             64 * std::numeric_limits<double>::epsilon() * expected.norm());
   EXPECT_TRUE(walking.parameterCovariance() == still.parameterCovariance() + walk);
+  // Independently of that formula: a walk at the interval's end leaves the state's error x̂ − x = η + W⁻ e
+  // as it was, so cov(η + W⁻ e) must not change (a wrong sign of the cross terms would add 4 W⁻ Q_θ W⁻ᵀ).
+  Eigen::Matrix3d stateError, stateErrorWalking;
+  ASSERT_TRUE(still.stateErrorCovariance(predicted, stateError));
+  ASSERT_TRUE(walking.stateErrorCovariance(predicted, stateErrorWalking));
+  EXPECT_LT((stateErrorWalking - stateError).cwiseAbs().maxCoeff(),
+            64 * std::numeric_limits<double>::epsilon() * expected.norm());
 }
 
 // The joint covariance's gain of θ (docs/algorithms.md §5.3) is the Kalman gain of the augmented linear

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <stdexcept>
 
 #include <Eigen/Core>
 #include <gtest/gtest.h>
@@ -82,6 +83,22 @@ TEST(PlantSimulation, ProcessNoiseEntersAtTheEndOfEveryIntervalWithItsCovariance
   ASSERT_EQ(intervals, kIntervals);
   expectSampleCovariance(stateSample / double(intervals), o.processNoise->state, intervals);
   expectSampleCovariance(parameterSample / double(intervals), o.processNoise->parameters, intervals);
+}
+
+// A singular Q (the second state without process noise) leaves that state where it started, and moves
+// the first as before; a Q that is not semi-definite is refused.
+TEST(PlantSimulation, ASingularQLeavesItsNullDirectionStill) {
+  auto o = options();
+  o.processNoise->state << 4e-2, 0, 0, 0;
+  const auto data = simulatePlant(StillPlant(), o, mjukf::Rk4<double>());
+  long moved = 0;
+  for (std::size_t k = 0; k < data.stateTruth.size(); ++k) {
+    EXPECT_EQ(data.stateTruth[k](1), o.initialState(1)) << k;
+    moved += data.stateTruth[k](0) != o.initialState(0);
+  }
+  EXPECT_GT(moved, kIntervals * kEvery / 2);
+  o.processNoise->state << 4e-2, 0, 0, -1e-6;
+  EXPECT_THROW(simulatePlant(StillPlant(), o, mjukf::Rk4<double>()), std::invalid_argument);
 }
 
 // The process noise has a stream of its own: a seed's measurement noise is the same draws with it.

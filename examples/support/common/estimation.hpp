@@ -116,14 +116,16 @@ paper::ScheduleOutcome wholeIntervalSchedule(Filter& filter, long rows, typename
   using Scalar = typename Filter::Scalar;
   paper::ScheduleOutcome outcome;
   if (rows < 1) return outcome;
+  if (measurementEvery < 1) {
+    outcome.status = Status::InvalidStepSize;
+    return outcome;
+  }
   record(0L, static_cast<const Filter&>(filter));
   for (long k = 1; k < rows; ++k) {
     if (k % measurementEvery == 0) {
       Status status = filter.timeUpdate(Scalar(k - measurementEvery) * h, h, measurementEvery);
-      if (taken(status)) status = filter.measurementUpdate(measurementAt(k));
-      outcome.repairs += status == Status::Repaired;
-      outcome.rejected += status == Status::MeasurementRejected;
-      if (!taken(status) && status != Status::MeasurementRejected) {
+      if (outcome.goesOn(status)) status = filter.measurementUpdate(measurementAt(k));
+      if (!outcome.goesOn(status)) {
         outcome.status = status;
         outcome.row = k;
         return outcome;

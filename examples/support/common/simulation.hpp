@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <optional>
 #include <random>
 #include <stdexcept>
@@ -52,15 +53,20 @@ struct ProcessNoise {
 };
 
 /// L lower triangular with L Lᵀ = C, for C symmetric positive semi-definite and possibly singular (a
-/// state without process noise): Cholesky's columns, with a zero column where the pivot is not positive
-/// (of a semi-definite C, that column's entries below it are zero too).
+/// state without process noise): Cholesky's columns, with a zero column where the pivot is within
+/// rounding of zero (n ε max Cᵢᵢ; of a semi-definite C, that column's entries below it are zero too).
+/// Throws std::invalid_argument for a C that is not finite or has a pivot below that, not semi-definite.
 template <class Matrix>
 Matrix semidefiniteCholesky(const Matrix& c) {
+  if (!c.allFinite()) throw std::invalid_argument("process noise: not finite");
+  const double roundoff =
+      double(c.rows()) * std::numeric_limits<double>::epsilon() * c.diagonal().cwiseAbs().maxCoeff();
   Matrix l = Matrix::Zero();
   for (int j = 0; j < c.rows(); ++j) {
     double pivot = c(j, j);
     for (int k = 0; k < j; ++k) pivot -= l(j, k) * l(j, k);
-    if (!(pivot > 0)) continue;
+    if (pivot < -roundoff) throw std::invalid_argument("process noise: not positive semi-definite");
+    if (pivot <= roundoff) continue;
     l(j, j) = std::sqrt(pivot);
     for (int i = j + 1; i < c.rows(); ++i) {
       double sum = c(i, j);

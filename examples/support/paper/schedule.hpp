@@ -17,6 +17,14 @@ struct ScheduleOutcome {
   long row = 0;
   long repairs = 0;   ///< steps that returned Status::Repaired (taken)
   long rejected = 0;  ///< measurement updates that returned Status::MeasurementRejected
+
+  /// Counts a step taken with a repair or a measurement the gate rejected, and says whether the run
+  /// goes on after `s`: a taken step or a rejected measurement.
+  bool goesOn(Status s) {
+    repairs += s == Status::Repaired;
+    rejected += s == Status::MeasurementRejected;
+    return taken(s) || s == Status::MeasurementRejected;
+  }
 };
 
 /// Drives `filter` over data rows k = 0 … rows − 1 at t_k = k h, the way the paper's experiments do:
@@ -38,23 +46,17 @@ ScheduleOutcome runSchedule(Filter& filter, long rows, typename Filter::Scalar h
     outcome.status = Status::InvalidStepSize;
     return outcome;
   }
-  // Counts a taken-with-repair or gated step and says whether the run goes on.
-  const auto goesOn = [&outcome](Status s) {
-    outcome.repairs += s == Status::Repaired;
-    outcome.rejected += s == Status::MeasurementRejected;
-    return taken(s) || s == Status::MeasurementRejected;
-  };
   record(0L, static_cast<const Filter&>(filter));
   for (long k = 0; k + 1 < rows; ++k) {
     const Scalar t = Scalar(k) * h;
     Status status;
     if ((k + 1) % measurementEvery == 0) {
       status = filter.timeUpdate(t, h);
-      if (goesOn(status)) status = filter.measurementUpdate(measurementAt(k + 1));
+      if (outcome.goesOn(status)) status = filter.measurementUpdate(measurementAt(k + 1));
     } else {
       status = filter.propagateMean(t, h);
     }
-    if (!goesOn(status)) {
+    if (!outcome.goesOn(status)) {
       outcome.status = status;
       outcome.row = k + 1;
       return outcome;
