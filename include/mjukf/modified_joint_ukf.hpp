@@ -153,6 +153,12 @@ struct ModifiedJointUkfSettings : ParameterEstimationSettings<Scalar_, StateDim,
   /// (docs/studies.md, "The plant as the filters model it"). As JUKF's Q_θ: the square of how much each
   /// parameter may change per time update.
   ParamMatrix parameterProcessNoise = ParamMatrix::Zero();
+
+  /// Whether the filter follows the covariance of θ̂ (and the sensitivities W and ψ it needs):
+  /// `followParameterCovariance` or either automatic mode.
+  bool followsParameterCovariance() const {
+    return followParameterCovariance || automaticTransformation || adaptiveScaling;
+  }
 };
 
 /// \cond INTERNAL
@@ -188,9 +194,7 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   using ChangeDetector = detail::ParameterChangeDetector<Scalar, MeasDim, ParamDim>;
 
   ModifiedJointParameters(const Settings& settings, const Param& initialParameters)
-      : followsSensitivities_(settings.automaticTransformation || settings.adaptiveScaling ||
-                              settings.followParameterCovariance),
-        boundsActive_(settings.parameterBounds.active()) {
+      : followsSensitivities_(settings.followsParameterCovariance()), boundsActive_(settings.parameterBounds.active()) {
     spread(settings, initialParameters);
   }
 
@@ -515,8 +519,8 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<typename Est::Matrix, 9> stateErrorCovariance_{Est::Matrix::Zero()};
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<bool, 10> coversParameterError_{false};
   // The gain of θ of the update in progress (p × m), and the joint covariance's workspace for it: S's
-  // factor L, L⁻¹ ψ, g(x̂⁻, θ̂) (shared with the sensitivities), and P_θ's widening on a detected change (and whether it
-  // applies).
+  // factor L, L⁻¹ ψ, g(x̂⁻, θ̂) (shared with the sensitivities), and P_θ's widening on a detected change
+  // (and whether it applies).
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<Transformation, 12> parameterGain_{Transformation::Zero()};
   using MeasMatrix = Eigen::Matrix<Scalar, MeasDim, MeasDim>;
   MJUKF_NO_UNIQUE_ADDRESS IfAutomatic<MeasMatrix, 13> jointInnovationFactor_{MeasMatrix::Zero()};
@@ -628,8 +632,7 @@ class ModifiedJointUkf
     if (SettingsError e =
             detail::requirePositiveSemiDefinite(kOwner, "parameterProcessNoise", settings.parameterProcessNoise))
       return e;
-    if (!(settings.followParameterCovariance || settings.automaticTransformation || settings.adaptiveScaling) &&
-        !settings.parameterProcessNoise.isZero(Scalar(0)))
+    if (!settings.followsParameterCovariance() && !settings.parameterProcessNoise.isZero(Scalar(0)))
       return detail::invalid(kOwner, "parameterProcessNoise",
                              "must be zero when the covariance of the parameters is not followed "
                              "(followParameterCovariance false, both automatic modes off)");

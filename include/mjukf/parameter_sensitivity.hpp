@@ -137,12 +137,12 @@ class ParameterSensitivity {
   }
 
   /// Measurement update about the prior (x̂⁻, θ̂), with g the model's measurement and `nominal` =
-  /// g(x̂⁻, θ̂): ψ by forward differences of g along (W⁻ᵣ, eᵣ), zero on missing components; W ← W⁻ − K ψ; the information
-  /// I ← λ I + (1 − λ) I₀ + ψᵀ P_yy⁻¹ ψ (the prior I₀ is never forgotten) with the forgetting
-  /// λ = max(exp(−Δt / memory), exp(−1 / minimumUpdates)), Δt the time since the last correction (a
-  /// memory of `memory` time units, and of at least `minimumUpdates` updates however long the
-  /// interval); and the weight w of this update's step (`weight()`), eased in over the first `easing`
-  /// (a share) of the memory.
+  /// g(x̂⁻, θ̂): ψ by forward differences of g along (W⁻ᵣ, eᵣ), zero on missing components;
+  /// W ← W⁻ − K ψ; the information I ← λ I + (1 − λ) I₀ + ψᵀ P_yy⁻¹ ψ (the prior I₀ is never
+  /// forgotten) with the forgetting λ = max(exp(−Δt / memory), exp(−1 / minimumUpdates)), Δt the time
+  /// since the last correction (a memory of `memory` time units, and of at least `minimumUpdates`
+  /// updates however long the interval); and the weight w of this update's step (`weight()`), eased in
+  /// over the first `easing` (a share) of the memory.
   /// `innovationFactor` is the lower Cholesky factor S of P_yy and `whitenedCross` is U = P_xy S⁻ᵀ, so
   /// that K ψ = U (S⁻¹ ψ) (detail/unscented_engine.hpp). Returns false (candidates unspecified) when a
   /// result is not finite.

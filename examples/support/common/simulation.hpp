@@ -13,7 +13,6 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
-#include <limits>
 #include <optional>
 #include <random>
 #include <stdexcept>
@@ -21,6 +20,8 @@
 
 #include "common/cli.hpp"
 #include "common/plant_data.hpp"
+#include "mjukf/detail/linear_algebra.hpp"
+#include "mjukf/detail/validation.hpp"
 #include "mjukf/integrators/i_tr_bdf2.hpp"
 #include "mjukf/simulation.hpp"
 
@@ -52,29 +53,17 @@ struct ProcessNoise {
       Eigen::Matrix<double, Model::ParamDim, Model::ParamDim>::Zero();
 };
 
-/// L lower triangular with L Lᵀ = C, for C symmetric positive semi-definite and possibly singular (a
-/// state without process noise): Cholesky's columns, with a zero column where the pivot is within
-/// rounding of zero (n ε max Cᵢᵢ; of a semi-definite C, that column's entries below it are zero too).
-/// Throws std::invalid_argument for a C that is not finite or has a pivot below that, not semi-definite.
+/// S with S Sᵀ = C for a process noise C (`setting`), which may be singular (a state without process
+/// noise): the library's own check that C is finite, symmetric and positive semi-definite, then the
+/// factor of its positive part (detail/linear_algebra.hpp). Throws std::invalid_argument naming it.
 template <class Matrix>
-Matrix semidefiniteCholesky(const Matrix& c) {
-  if (!c.allFinite()) throw std::invalid_argument("process noise: not finite");
-  const double roundoff =
-      double(c.rows()) * std::numeric_limits<double>::epsilon() * c.diagonal().cwiseAbs().maxCoeff();
-  Matrix l = Matrix::Zero();
-  for (int j = 0; j < c.rows(); ++j) {
-    double pivot = c(j, j);
-    for (int k = 0; k < j; ++k) pivot -= l(j, k) * l(j, k);
-    if (pivot < -roundoff) throw std::invalid_argument("process noise: not positive semi-definite");
-    if (pivot <= roundoff) continue;
-    l(j, j) = std::sqrt(pivot);
-    for (int i = j + 1; i < c.rows(); ++i) {
-      double sum = c(i, j);
-      for (int k = 0; k < j; ++k) sum -= l(i, k) * l(j, k);
-      l(i, j) = sum / l(j, j);
-    }
-  }
-  return l;
+Matrix processNoiseRoot(const char* setting, const Matrix& c) {
+  if (const auto error = mjukf::detail::requirePositiveSemiDefinite("simulatePlant", setting, c))
+    mjukf::detail::throwInvalid(error);
+  Matrix root;
+  if (!mjukf::detail::positivePartFactor(c, root))
+    throw std::invalid_argument("simulatePlant: no factor of the process noise");
+  return root;
 }
 
 template <class Model>
@@ -131,8 +120,8 @@ void simulateWithProcessNoise(const Model& model, const Integrator& integrator, 
   using Param = typename Model::Param;
   const ProcessNoise<Model>& noise = *options.processNoise;
   if (noise.every < 1) throw std::invalid_argument("simulatePlant: process noise every < 1 step");
-  const auto stateRoot = semidefiniteCholesky(noise.state);
-  const auto parameterRoot = semidefiniteCholesky(noise.parameters);
+  const auto stateRoot = processNoiseRoot("process noise of the state", noise.state);
+  const auto parameterRoot = processNoiseRoot("process noise of the parameters", noise.parameters);
   std::mt19937_64 random(options.seed ^ kProcessNoiseStream);
   std::normal_distribution<double> normal(0.0, 1.0);
   const auto draw = [&](auto vector) {

@@ -291,10 +291,9 @@ FilterSetup<Experiment> studySetup(const StudyFilter& filter, const StudyScenari
       setup.modifiedJointUkf.automaticTransformation = true;
       setup.modifiedJointUkf.adaptiveScaling = true;
     }
-    auto& mjukf = setup.modifiedJointUkf;  // its Q_θ, where it follows the covariance of θ̂ that Q_θ widens
-    if (scenario.matchedNoise &&
-        (mjukf.followParameterCovariance || mjukf.automaticTransformation || mjukf.adaptiveScaling))
-      mjukf.parameterProcessNoise = Experiment::dualUkf().parameterProcessNoise;
+    // Its Q_θ, where it follows the covariance of θ̂ that Q_θ widens.
+    if (scenario.matchedNoise && setup.modifiedJointUkf.followsParameterCovariance())
+      setup.modifiedJointUkf.parameterProcessNoise = Experiment::dualUkf().parameterProcessNoise;
   }
   return setup;
 }
