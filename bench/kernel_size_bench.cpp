@@ -57,11 +57,12 @@ void covariance(benchmark::State& state) {
   for (auto _ : state) {
     benchmark::DoNotOptimize(in.d.data());
     if constexpr (Form == 0)
-      la::weightedOuterSumCoefficientwise(in.d, in.d, in.w, in.p);
+      la::weightedCovarianceLowerCoefficientwise(in.d, in.w, in.p);
     else if constexpr (Form == 1)
-      la::weightedCovarianceTriangle(in.d, in.w, in.p);
+      la::weightedCovarianceLowerTriangle(in.d, in.w, in.p);
     else
       la::weightedOuterSumProduct(in.d, in.d, in.w, in.p);
+    la::mirrorLowerTriangle(in.p);
     benchmark::DoNotOptimize(in.p.data());
     benchmark::ClobberMemory();
   }

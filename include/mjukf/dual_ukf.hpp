@@ -207,9 +207,10 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
   // x̂ is the state's estimate given θ̂ (its mean conditional on θ̂, which moves with θ̂ by W): a
   // correction that moved θ̂ by Δ moves x̂ by W Δ, so that x̂ stays the estimate given the θ̂ it is
   // committed with (the UpdatedParameters ordering moves x̂_{k−1} before predicting again instead).
-  void constrainMean(Vector& mean) {
-    if (correcting_ && !useCorrectedParameters_)
-      mean.noalias() += candidateSensitivity_ * (estimate_.candidateMean() - estimate_.mean());
+  bool constrainMean(Vector& mean) {
+    if (!correcting_ || useCorrectedParameters_) return false;
+    mean.noalias() += candidateSensitivity_ * (estimate_.candidateMean() - estimate_.mean());
+    return true;
   }
 
   void commitPrediction() {

@@ -75,8 +75,10 @@ class AugmentedParameters : public ParameterPolicy<Model, Integrator, Settings, 
   }
   Status correctParameters(const typename Base::CorrectionOf&) { return Status::Ok; }
   // The θ block of every committed mean within the bounds (parameter_bounds.hpp).
-  void constrainMean(Vector& z) {
-    if (boundsActive_) bounds_.clamp(z.template tail<ParamDim>());
+  bool constrainMean(Vector& z) {
+    if (!boundsActive_) return false;
+    bounds_.clamp(z.template tail<ParamDim>());
+    return true;  // may have moved it
   }
   void commitPrediction() {}
   void commitCorrection() {}

@@ -391,7 +391,7 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
         return Status::NonFiniteResult;
     return Status::Ok;
   }
-  void constrainMean(Vector&) {}
+  bool constrainMean(Vector&) { return false; }
 
   void commitPrediction() {
     if constexpr (Automatic) {

@@ -62,7 +62,7 @@ class KnownParameters : public ParameterPolicy<Model, Integrator, Settings, Est>
     return engine.correctState(y, u, present);
   }
   Status correctParameters(const typename Base::CorrectionOf&) { return Status::Ok; }
-  void constrainMean(Vector&) {}
+  bool constrainMean(Vector&) { return false; }
   void commitPrediction() {}
   void commitCorrection() {}
   void commitOpenLoop(typename Base::Scalar) {}

@@ -49,7 +49,7 @@ struct Policy : mjukf::detail::ParameterPolicy<Plant, Integrator, Settings, Est>
     return engine.correctState(y, u, present);
   }
   mjukf::Status correctParameters(const mjukf::detail::Correction<Plant, Settings, Est>&) { return mjukf::Status::Ok; }
-  void constrainMean(Est::Vector&) {}
+  bool constrainMean(Est::Vector&) { return false; }
   void commitPrediction() {}
 #if MJUKF_BROKEN_HOOK == 2  // 2: a misspelled hook, which before the checks compiled and was never called
   void commitParameterCorrection() {}

@@ -262,25 +262,48 @@ void mirrorLowerTriangle(Eigen::MatrixBase<Matrix>& m) {
     for (int r = 0; r < c; ++r) m(r, c) = m(c, r);
 }
 
-// out = Σ Wcᵢ dᵢ dᵢᵀ, a covariance: weightedOuterSum(d, d, …)'s coefficient-wise form for small point
-// sets (bit for bit what it was), GEMM from covarianceProduct, and from covarianceTriangle a product of
-// the lower triangle only, mirrored: half the arithmetic, and exactly symmetric.
+// The lower triangle of out ← Σ Wcᵢ dᵢ dᵢᵀ, a covariance; the strictly upper triangle is for the caller
+// to mirror (a symmetric result needs one triangle, about half the products of the full sum). Three forms:
+//  - small point sets, coefficient-wise: column c's rows c … L − 1 as a coefficient-wise product of the
+//    weighted deviations' rows with row c: the lower triangle of the full coefficient-wise sum
+//    (weightedOuterSumCoefficientwise) up to the order of its sums, which Eigen's vectorisation chooses
+//    (that full sum is not exactly symmetric either: (Wₖ aᵢₖ) aⱼₖ and (Wₖ aⱼₖ) aᵢₖ round apart);
+//  - from covarianceProduct, GEMM (both triangles: its packing costs more than the half it could skip);
+//  - from covarianceTriangle, a product of the lower triangle only.
 template <class Dev, class Weights, class Out>
-void weightedCovarianceTriangle(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase<Weights>& weights,
-                                Eigen::MatrixBase<Out>& out) {
-  out.template triangularView<Eigen::Lower>() = (d * weights.asDiagonal()) * d.transpose();
-  mirrorLowerTriangle(out);
+void weightedCovarianceLowerCoefficientwise(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase<Weights>& weights,
+                                            Eigen::MatrixBase<Out>& out) {
+  constexpr int N = Dev::RowsAtCompileTime;
+  const Eigen::Matrix<typename Out::Scalar, N, Dev::ColsAtCompileTime> weighted = d * weights.asDiagonal();
+  forEachIndex<N>([&](auto column) {
+    constexpr int c = decltype(column)::value;
+    out.col(c).template tail<N - c>().noalias() =
+        weighted.template bottomRows<N - c>().lazyProduct(d.row(c).transpose());
+    return true;
+  });
 }
 template <class Dev, class Weights, class Out>
-void weightedCovariance(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase<Weights>& weights,
-                        Eigen::MatrixBase<Out>& out) {
+void weightedCovarianceLowerTriangle(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase<Weights>& weights,
+                                     Eigen::MatrixBase<Out>& out) {
+  out.template triangularView<Eigen::Lower>() = (d * weights.asDiagonal()) * d.transpose();
+}
+template <class Dev, class Weights, class Out>
+void weightedCovarianceLower(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase<Weights>& weights,
+                             Eigen::MatrixBase<Out>& out) {
   constexpr int L = Dev::ColsAtCompileTime / 2;
   if constexpr (atLeast<L>(generalKernelsFrom<typename Out::Scalar>.covarianceTriangle))
-    weightedCovarianceTriangle(d, weights, out);
+    weightedCovarianceLowerTriangle(d, weights, out);
   else if constexpr (atLeast<L>(generalKernelsFrom<typename Out::Scalar>.covarianceProduct))
     weightedOuterSumProduct(d, d, weights, out);
   else
-    weightedOuterSumCoefficientwise(d, d, weights, out);
+    weightedCovarianceLowerCoefficientwise(d, weights, out);
+}
+// out = Σ Wcᵢ dᵢ dᵢᵀ, exactly symmetric: weightedCovarianceLower, mirrored.
+template <class Dev, class Weights, class Out>
+void weightedCovariance(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase<Weights>& weights,
+                        Eigen::MatrixBase<Out>& out) {
+  weightedCovarianceLower(d, weights, out);
+  mirrorLowerTriangle(out);
 }
 
 // P ← P − U Uᵀ (U = P_xy S⁻ᵀ, the measurement update's K P_yy Kᵀ). Small L: coefficient-wise, both

@@ -185,6 +185,13 @@ class CovarianceGuard {
   // lower Cholesky factor of cov as returned. The repair is covariance_repair.hpp's.
   Status settle(Matrix& cov, const CovarianceRepair<Scalar>& repair) {
     symmetrize(cov);
+    return settleSymmetric(cov, repair);
+  }
+  // settle() of a cov that is exactly symmetric already, as every candidate of a step is formed (one
+  // triangle computed and mirrored, or a sum whose two triangles are the same products): the
+  // symmetrisation would change nothing, and at L = 6 it costs about as much as the finiteness check
+  // and half the factorisation.
+  Status settleSymmetric(Matrix& cov, const CovarianceRepair<Scalar>& repair) {
     if (!allFinite(cov)) return Status::NonFiniteResult;
     if (choleskyLower(cov, factor_)) return Status::Ok;
     const Scalar scale = cov.diagonal().cwiseAbs().mean();
@@ -327,7 +334,7 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
   /// is S Sᵀ (square-root form).
   const Matrix& factor() const { return factor_; }
   /// The points of the last time update, while they are still the estimate's (hasPoints()).
-  const Points& points() const { return points_; }
+  const Points& points() const { return pointSets_[workSet_ ^ 1]; }
   bool hasPoints() const { return hasPoints_; }
   // The measurement noise of the next correct() when it is not the one given at construction (the dual
   // filter's parameter filter observes through the state's uncertainty, which changes every step). The
@@ -360,6 +367,7 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
     covariance_ = symmetric;
     factor_ = factor;
     hasPoints_ = false;
+    deviationsHold_ = Deviations::Other;
     diagnostics_ = Diagnostics();
     return true;
   }
@@ -370,7 +378,7 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
   /// committed factor, or another estimate's): nothing is factored here.
   Status draw(const Vector& mean, const Matrix& lowerFactor) {
     if (!allFinite(mean)) return Status::NotPositiveDefinite;
-    drawSymmetricPoints<SigmaPoints::HasCenter>(mean, lowerFactor, sigmaPoints_.gamma(), workPoints_);
+    drawSymmetricPoints<SigmaPoints::HasCenter>(mean, lowerFactor, sigmaPoints_.gamma(), workPoints());
     if constexpr (SquareRoot) sr().workPrior = PriorPoints::Drawn;
     return Status::Ok;
   }
@@ -386,8 +394,9 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
   /// from [S⁻ | E] (and the prior's points count as Other: the posterior is a downdate of S⁻); when a
   /// factor fails, the full form's P⁻ for settle() to check and repair.
   void predict(const Matrix& processNoise, const Matrix* floor = nullptr) {
-    weightedMean(workPoints_, sigmaPoints_.meanWeights(), candidateMean_);
-    deviations_.noalias() = workPoints_.colwise() - candidateMean_;
+    weightedMean(workPoints(), sigmaPoints_.meanWeights(), candidateMean_);
+    deviations_.noalias() = workPoints().colwise() - candidateMean_;
+    deviationsHold_ = Deviations::OfWorkPoints;
     if constexpr (SquareRoot) {
       sr().predictedMean = candidateMean_;
       sr().workPrior = floor ? PriorPoints::Other : PriorPoints::Predicted;
@@ -399,8 +408,10 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
       }
       sr().candidate = SquareRootPart_::Candidate::CovarianceOnly;
     }
-    weightedCovariance(deviations_, sigmaPoints_.covarianceWeights(), candidateCovariance_);
+    // One triangle of Σ Wcᵢ Δχᵢ Δχᵢᵀ + Q, mirrored: exactly symmetric (Q enters by its lower triangle).
+    weightedCovarianceLower(deviations_, sigmaPoints_.covarianceWeights(), candidateCovariance_);
     candidateCovariance_ += processNoise;
+    mirrorLowerTriangle(candidateCovariance_);
     if (floor) raiseToFloor(*floor, candidateCovariance_);
   }
 
@@ -411,10 +422,13 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
     symmetrize(shortfall);
     return positivePartFactor(shortfall, added);
   }
-  /// P += E Eᵀ (shortfallFactor). A non-finite difference leaves P as it is, for settle() to judge.
+  /// P += E Eᵀ (shortfallFactor), exactly symmetric as P was. A non-finite difference leaves P as it is,
+  /// for settle() to judge.
   static void raiseToFloor(const Matrix& floor, Matrix& covariance) {
     Matrix added;
-    if (shortfallFactor(floor, covariance, added)) covariance.noalias() += added * added.transpose();
+    if (!shortfallFactor(floor, covariance, added)) return;
+    covariance.noalias() += added * added.transpose();
+    mirrorLowerTriangle(covariance);
   }
   /// The square-root form's raiseToFloor: E from P⁻ = S⁻ S⁻ᵀ, then S⁻ from [S⁻ | E] by one
   /// triangularisation. In a function of its own, so that the filters without a floor do not carry its
@@ -436,6 +450,7 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
   /// or the full form's P⁻ when that fails.
   void predictRandomWalk(Scalar forgetting, const Matrix& processNoise) {
     candidateMean_ = mean_;
+    deviationsHold_ = Deviations::Other;
     if constexpr (SquareRoot) {
       sr().workPrior = PriorPoints::Other;  // no points yet: the caller draws them from the candidate
       Eigen::Matrix<Scalar, L, 2 * L> stack;
@@ -448,6 +463,7 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
       sr().candidate = SquareRootPart_::Candidate::CovarianceOnly;
     }
     candidateCovariance_ = covariance_ / forgetting + processNoise;
+    mirrorLowerTriangle(candidateCovariance_);  // exactly symmetric, as settle() takes it
   }
 
   /// §3 from `points` about `prior` and their images `measured` = Yᵢ, into candidateMean(),
@@ -461,12 +477,19 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
   /// S⁻ otherwise; when a factor cannot be obtained so, it falls back to the full form's matrix.
   Status correct(const Points& points, const MeasPoints& measured, const Prior& prior, const MeasVector& y,
                  const MeasMatrix& measurementNoise, const Mask* present, const Gate& gate) {
-    if (!allFinite(measured)) return Status::NonFiniteResult;  // the model's g gave NaN or Inf
+    // The model's g gave NaN or ±Inf: with every component present this shows as P_yy without a factor
+    // (a non-finite Yᵢ makes its row of P_yy NaN), so it is told apart only on that path, below.
+    if (present && !allFinite(measured)) return Status::NonFiniteResult;
     Diagnostics& d = candidateDiagnostics_;
     MeasVector predictedMeasurement;
     weightedMean(measured, sigmaPoints_.meanWeights(), predictedMeasurement);  // ŷ
     measurementDeviations_.noalias() = measured.colwise() - predictedMeasurement;
-    deviations_.noalias() = points.colwise() - prior.mean;
+    // Δχᵢ = χᵢ⁺ − x̂⁻: still in deviations_ when these are the committed points about the committed mean
+    // as the time update formed them (its predict(), and a mean no policy moved since).
+    const bool formed =
+        deviationsHold_ == Deviations::OfCommittedPoints && &points == &this->points() && &prior.mean == &mean_;
+    if (!formed) deviations_.noalias() = points.colwise() - prior.mean;
+    deviationsHold_ = Deviations::Other;  // the square-root posterior writes Δχᵢ − K ΔYᵢ here
     const auto& weights = sigmaPoints_.covarianceWeights();
     if constexpr (!SquareRoot) {
       weightedCovariance(measurementDeviations_, weights, d.innovationCovariance);
@@ -491,13 +514,12 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
       }
     }
 
-    if constexpr (SquareRoot) {
-      if (!squareRootInnovationFactor(measurementNoise, present, presentCount))
-        return Status::InnovationNotPositiveDefinite;
-    } else {
-      if (!allFinite(d.innovationCovariance) || !choleskyLower(d.innovationCovariance, innovationFactor_))
-        return Status::InnovationNotPositiveDefinite;
-    }
+    bool factored;
+    if constexpr (SquareRoot)
+      factored = squareRootInnovationFactor(measurementNoise, present, presentCount);
+    else
+      factored = choleskyLower(d.innovationCovariance, innovationFactor_);  // fails on NaN and ±Inf too
+    if (!factored) return allFinite(measured) ? Status::InnovationNotPositiveDefinite : Status::NonFiniteResult;
     // With P_yy = S Sᵀ, the gain is K = P_xy P_yy⁻¹ = U S⁻¹ with U = P_xy S⁻ᵀ, so that
     //   K ν = U w with w = S⁻¹ ν (the whitened innovation, whose |w|² is the NIS), and
     //   K P_yy Kᵀ = U Uᵀ:
@@ -521,9 +543,11 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
     return Status::Ok;
   }
 
-  /// What every step does with the covariance it is about to commit: symmetrise candidateCovariance(),
-  /// check it has a Cholesky factor, repair it if not (covariance_repair.hpp). Ok, Repaired, or a
-  /// refusal. Only a covariance accepted here is committed. Square-root form: a factor obtained without
+  /// What every step does with the covariance it is about to commit: check that candidateCovariance()
+  /// is finite and has a Cholesky factor, repair it if not (covariance_repair.hpp). Ok, Repaired, or a
+  /// refusal. The candidate is exactly symmetric as formed (predict(), predictRandomWalk() and correct()
+  /// compute one triangle and mirror it, or sums whose two triangles are the same products), so it is
+  /// not symmetrised here. Only a covariance accepted here is committed. Square-root form: a factor obtained without
   /// subtraction is accepted when it is finite with a positive diagonal (Ok; P = S Sᵀ is formed here,
   /// exactly symmetric), NonFiniteResult otherwise; the full form's P of a step whose factor could not
   /// be obtained goes through the same check and repair as in the full form, so that every status means
@@ -533,7 +557,7 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
       using Candidate = typename SquareRootPart_::Candidate;
       Status s;
       if (sr().candidate == Candidate::CovarianceOnly) {
-        s = guard_.settle(candidateCovariance_, repair);
+        s = guard_.settleSymmetric(candidateCovariance_, repair);
         if (taken(s)) sr().candidateFactor = guard_.factor();
       } else {
         if (sr().candidate == Candidate::Factor) outerOfLower(sr().candidateFactor, candidateCovariance_);
@@ -544,7 +568,7 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
       sr().settled = s;
       return s;
     } else {
-      return guard_.settle(candidateCovariance_, repair);
+      return guard_.settleSymmetric(candidateCovariance_, repair);
     }
   }
 
@@ -562,10 +586,15 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
   }
 
   /// Commits a time update that settle() accepted: its mean, covariance and factor, and its points.
-  void commitPrediction() {
+  /// `meanAsPredicted`: the candidate mean is still predict()'s (no policy moved it), so that the
+  /// deviations predict() formed are those of the committed points about the committed mean, and the
+  /// measurement update that follows reads them instead of forming them again.
+  void commitPrediction(bool meanAsPredicted = false) {
     if constexpr (SquareRoot) sr().pointsPrior = workPointsPrior();
-    points_ = workPoints_;
+    workSet_ ^= 1;  // the work points become the committed ones: swapped, not copied
     hasPoints_ = true;
+    deviationsHold_ = meanAsPredicted && deviationsHold_ == Deviations::OfWorkPoints ? Deviations::OfCommittedPoints
+                                                                                     : Deviations::Other;
     commitCandidate();
   }
   /// Commits a measurement update that settle() accepted: its mean, covariance, factor and diagnostics.
@@ -573,16 +602,18 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
   void commitCorrection() {
     diagnostics_ = candidateDiagnostics_;
     hasPoints_ = false;
+    deviationsHold_ = Deviations::Other;
     commitCandidate();
   }
   /// Commits a new mean alone (an open-loop propagation): P and its factor stay.
   void commitMean(const Vector& mean) {
     mean_ = mean;
     hasPoints_ = false;
+    deviationsHold_ = Deviations::Other;
   }
 
-  Points& workPoints() { return workPoints_; }
-  const Points& workPoints() const { return workPoints_; }
+  Points& workPoints() { return pointSets_[workSet_]; }
+  const Points& workPoints() const { return pointSets_[workSet_]; }
   MeasPoints& measuredPoints() { return measuredPoints_; }
   Vector& candidateMean() { return candidateMean_; }
   const Vector& candidateMean() const { return candidateMean_; }
@@ -722,12 +753,19 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
   Vector mean_ = Vector::Zero();
   Matrix covariance_ = Matrix::Zero();
   Matrix factor_ = Matrix::Zero();  // lower S with covariance_ = S Sᵀ
-  Points points_ = Points::Zero();  // χᵢ⁺ of the last time update, used by the measurement update
   bool hasPoints_ = false;
+  // The points: pointSets_[workSet_] are the work points (drawn, then propagated in place), the other
+  // the committed χᵢ⁺ of the last time update (points(), read by the measurement update). A time update's
+  // commit swaps the two (workSet_ ^= 1) instead of copying L × (2L + 1) values.
+  unsigned char workSet_ = 0;
+  // What deviations_ holds: predict()'s workPoints() − candidateMean_, or points() − mean_ since a
+  // commitPrediction(true), or anything else. (Both bytes sit in the padding after hasPoints_.)
+  enum class Deviations : unsigned char { Other, OfWorkPoints, OfCommittedPoints };
+  Deviations deviationsHold_ = Deviations::Other;
   Diagnostics diagnostics_;
   // Workspace: a step computes here and commits only when the whole step succeeded. Zeroed once at
   // construction, so that copying a filter before its first step copies no indeterminate values.
-  Points workPoints_ = Points::Zero();                     // drawn, then propagated in place
+  Points pointSets_[2] = {Points::Zero(), Points::Zero()};
   MeasPoints measuredPoints_ = MeasPoints::Zero();         // Yᵢ = g(χᵢ⁺)
   Points deviations_ = Points::Zero();                     // χᵢ⁺ − x̂⁻ (square-root posterior: − K ΔYᵢ)
   MeasPoints measurementDeviations_ = MeasPoints::Zero();  // Yᵢ − ŷ
@@ -773,7 +811,8 @@ struct Correction {
 //                                                    the measurement update (Engine::correctState, or the
 //                                                    dual's: parameters first)
 //   Status correctParameters(const Correction&);      after the state's correction, into candidates
-//   void constrainMean(Vector& candidateMean);        on the settled candidate mean (bounds)
+//   bool constrainMean(Vector& candidateMean);        on the settled candidate mean (bounds); false
+//                                                    when it left the mean as it was
 //   void commitPrediction(); void commitCorrection(); void commitOpenLoop(Scalar interval);
 
 #define MJUKF_POLICY_HAS(Name, Call)            \
@@ -1249,8 +1288,8 @@ class UnscentedEngine {
     const Status settled = predict(step, estimate_.mean(), estimate_.factor());
     if (!input.allValuesFinite()) return Status::NonFiniteInput;  // the model's input(t) gave NaN or ±Inf
     if (!taken(settled)) return settled;
-    policy_.constrainMean(estimate_.candidateMean());
-    estimate_.commitPrediction();
+    const bool moved = policy_.constrainMean(estimate_.candidateMean());
+    estimate_.commitPrediction(!moved);
     policy_.commitPrediction();
     commitStepCheck();
     time_ = t + step.interval();
@@ -1263,8 +1302,9 @@ class UnscentedEngine {
   Status predict(const StepType& step, const Vector& mean, const Matrix& lowerFactor) {
     if (const Status s = estimate_.draw(mean, lowerFactor); s != Status::Ok) return s;
     policy_.propagatePoints(step, estimate_.workPoints());
-    if (!allFinite(estimate_.workPoints())) return Status::NonFiniteResult;
     estimate_.predict(settings_.processNoise, policy_.priorCovarianceFloor());
+    // The points are committed with the prediction, and are not checked apart: a NaN or ±Inf among them
+    // makes x̂⁻ = Σ Wmᵢ χᵢ⁺ NaN or ±Inf (even with a zero weight: 0 · NaN and 0 · Inf are NaN), checked here.
     if (!allFinite(estimate_.candidateMean())) return Status::NonFiniteResult;
     return estimate_.settle(settings_.repair);
   }
