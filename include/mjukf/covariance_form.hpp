@@ -11,8 +11,8 @@
 namespace mjukf {
 
 /// The covariance form of the paper and of every release before 0.2: a step forms P⁻ = Σ Wcᵢ ΔχᵢΔχᵢᵀ + Q
-/// and P = P⁻ − K P_yy Kᵀ explicitly, symmetrises P and factors it (Cholesky) before committing it,
-/// with the bounded repair of covariance_repair.hpp when rounding made it lose definiteness. The
+/// and P = P⁻ − K P_yy Kᵀ explicitly (one triangle, mirrored: exactly symmetric) and factors it (Cholesky) before
+/// committing it, with the bounded repair of covariance_repair.hpp when rounding made it lose definiteness. The
 /// cheapest form, and accurate while P stays well conditioned (κ(P) far below 1/ε).
 struct FullCovariance {};
 

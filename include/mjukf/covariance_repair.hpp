@@ -1,8 +1,8 @@
 #pragma once
 
 /// \file
-/// What a filter does with a covariance before committing it: symmetrise, check that it has a
-/// Cholesky factor, and, when it has none, a bounded repair (a small multiple of the identity).
+/// What a filter does with a covariance before committing it (formed exactly symmetric): check that it
+/// has a Cholesky factor, and, when it has none, a bounded repair (a small multiple of the identity).
 
 #include <limits>
 
@@ -46,7 +46,8 @@ SettingsError validateRepair(const char* owner, const CovarianceRepair<Scalar>& 
 }
 
 // A covariance a filter starts from (P₀, or the argument of reset()): symmetric positive definite as
-// given, and still with a Cholesky factor once symmetrised, as every committed P is. An error naming
+// given, and still with a Cholesky factor once symmetrised (assign() symmetrises it; every committed P is
+// exactly symmetric). An error naming
 // `setting` otherwise; after it passes, the engine's Estimate::assign() cannot fail on it
 // (detail/unscented_engine.hpp, which also holds the repair itself, CovarianceGuard).
 template <class Derived>

@@ -112,6 +112,8 @@ void expectSubtractionsAgree(std::mt19937_64& rng) {
       2 * 2 * gamma<Scalar>(M + 1) * (p.cwiseAbs() + u.cwiseAbs() * u.cwiseAbs().transpose()).template cast<double>();
   EXPECT_TRUE(((rank - old).template cast<double>().cwiseAbs().array() <= bound.array()).all()) << "L = " << L;
   EXPECT_EQ(rank, rank.transpose());
+  // Both forms are exactly symmetric (one triangle, mirrored): what settle() takes without symmetrising.
+  EXPECT_EQ(old, old.transpose()) << "L = " << L;
   EXPECT_EQ(chosen, L >= la::generalKernelsFrom<Scalar>.subtractRankUpdate ? rank : old) << "L = " << L;
 }
 

@@ -262,6 +262,23 @@ void mirrorLowerTriangle(Eigen::MatrixBase<Matrix>& m) {
     for (int r = 0; r < c; ++r) m(r, c) = m(c, r);
 }
 
+// Calls f(c, rows) for each column c = 0 … N − 1 of a lower triangle, rows = N − c its rows from the
+// diagonal down. Up to N = 12, rows is a compile-time size (Eigen::fix<N − c>), so that every block
+// has a fixed size and the compiler unrolls it; above, a plain int, so that the code and its compile
+// time do not grow as N² (the tests and the kernel benchmark instantiate these forms up to N = 36).
+template <int N, class F>
+void forEachLowerColumn(F&& f) {
+  if constexpr (N <= 12) {
+    forEachIndex<N>([&](auto column) {
+      constexpr int c = decltype(column)::value;
+      f(c, Eigen::fix<N - c>);
+      return true;
+    });
+  } else {
+    for (int c = 0; c < N; ++c) f(c, N - c);
+  }
+}
+
 // The lower triangle of out ← Σ Wcᵢ dᵢ dᵢᵀ, a covariance; the strictly upper triangle is for the caller
 // to mirror (a symmetric result needs one triangle, about half the products of the full sum). Three forms:
 //  - small point sets, coefficient-wise: column c's rows c … L − 1 as a coefficient-wise product of the
@@ -275,11 +292,8 @@ void weightedCovarianceLowerCoefficientwise(const Eigen::MatrixBase<Dev>& d, con
                                             Eigen::MatrixBase<Out>& out) {
   constexpr int N = Dev::RowsAtCompileTime;
   const Eigen::Matrix<typename Out::Scalar, N, Dev::ColsAtCompileTime> weighted = d * weights.asDiagonal();
-  forEachIndex<N>([&](auto column) {
-    constexpr int c = decltype(column)::value;
-    out.col(c).template tail<N - c>().noalias() =
-        weighted.template bottomRows<N - c>().lazyProduct(d.row(c).transpose());
-    return true;
+  forEachLowerColumn<N>([&](auto c, auto rows) {
+    out.col(c).tail(rows).noalias() = weighted.bottomRows(rows).lazyProduct(d.row(c).transpose());
   });
 }
 template <class Dev, class Weights, class Out>
@@ -306,12 +320,17 @@ void weightedCovariance(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase
   mirrorLowerTriangle(out);
 }
 
-// P ← P − U Uᵀ (U = P_xy S⁻ᵀ, the measurement update's K P_yy Kᵀ). Small L: coefficient-wise, both
-// triangles (each the same sum of the same products: exactly symmetric). Large L: a symmetric rank-k
-// update of the lower triangle, mirrored.
+// P ← P − U Uᵀ (U = P_xy S⁻ᵀ, the measurement update's K P_yy Kᵀ), exactly symmetric when P is: the
+// lower triangle is computed and mirrored. Small L: coefficient-wise, column c's rows c … L − 1 (a
+// coefficient-wise product over both triangles is not symmetric: Eigen's vectorisation sums some
+// coefficients in another order than their mirror images). Large L: a symmetric rank-k update of the
+// lower triangle.
 template <class Cov, class Cols>
 void subtractOuterCoefficientwise(Eigen::MatrixBase<Cov>& p, const Eigen::MatrixBase<Cols>& u) {
-  p.noalias() -= u.lazyProduct(u.transpose());
+  forEachLowerColumn<Cov::RowsAtCompileTime>([&](auto c, auto rows) {
+    p.col(c).tail(rows).noalias() -= u.bottomRows(rows).lazyProduct(u.row(c).transpose());
+  });
+  mirrorLowerTriangle(p);
 }
 template <class Cov, class Cols>
 void subtractOuterRankUpdate(Eigen::MatrixBase<Cov>& p, const Eigen::MatrixBase<Cols>& u) {

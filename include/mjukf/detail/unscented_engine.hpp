@@ -188,9 +188,9 @@ class CovarianceGuard {
     return settleSymmetric(cov, repair);
   }
   // settle() of a cov that is exactly symmetric already, as every candidate of a step is formed (one
-  // triangle computed and mirrored, or a sum whose two triangles are the same products): the
-  // symmetrisation would change nothing, and at L = 6 it costs about as much as the finiteness check
-  // and half the factorisation.
+  // triangle computed and mirrored; S Sᵀ in the square-root form): the symmetrisation would change
+  // nothing, and at L = 6 it cost about as much as the finiteness check and half the factorisation.
+  // (settle() is for a matrix of unknown symmetry.)
   Status settleSymmetric(Matrix& cov, const CovarianceRepair<Scalar>& repair) {
     if (!allFinite(cov)) return Status::NonFiniteResult;
     if (choleskyLower(cov, factor_)) return Status::Ok;
@@ -815,6 +815,10 @@ struct Correction {
 //                                                    when it left the mean as it was
 //   void commitPrediction(); void commitCorrection(); void commitOpenLoop(Scalar interval);
 
+// Accepts a bool and nothing else (not a void, not an int), in an unevaluated call.
+template <class T, class = std::enable_if_t<std::is_same_v<T, bool>>>
+void returnsBool(T);
+
 #define MJUKF_POLICY_HAS(Name, Call)            \
   template <class P, class = void>              \
   struct PolicyHas_##Name : std::false_type {}; \
@@ -838,7 +842,8 @@ MJUKF_POLICY_HAS(measurePoints,
                                                   std::declval<typename P::CheckEstimate::MeasPoints&>()))
 MJUKF_POLICY_HAS(correctParameters,
                  std::declval<P&>().correctParameters(std::declval<const typename P::CheckCorrection&>()))
-MJUKF_POLICY_HAS(constrainMean, std::declval<P&>().constrainMean(std::declval<typename P::CheckEstimate::Vector&>()))
+MJUKF_POLICY_HAS(constrainMean,
+                 returnsBool(std::declval<P&>().constrainMean(std::declval<typename P::CheckEstimate::Vector&>())))
 MJUKF_POLICY_HAS(commitPrediction, std::declval<P&>().commitPrediction())
 MJUKF_POLICY_HAS(commitCorrection, std::declval<P&>().commitCorrection())
 MJUKF_POLICY_HAS(commitOpenLoop, std::declval<P&>().commitOpenLoop(typename P::CheckEstimate::Vector::Scalar()))
@@ -862,7 +867,7 @@ constexpr bool checkParameterPolicy() {
       "parameter policy: missing member measurePoints(const Model&, const Input&, const Points&, MeasPoints&)");
   static_assert(PolicyHas_correctParameters<Policy>::value,
                 "parameter policy: missing member correctParameters(const Correction&) -> Status");
-  static_assert(PolicyHas_constrainMean<Policy>::value, "parameter policy: missing member constrainMean(Vector&)");
+  static_assert(PolicyHas_constrainMean<Policy>::value, "parameter policy: missing member bool constrainMean(Vector&)");
   static_assert(PolicyHas_commitPrediction<Policy>::value, "parameter policy: missing member commitPrediction()");
   static_assert(PolicyHas_commitCorrection<Policy>::value, "parameter policy: missing member commitCorrection()");
   static_assert(PolicyHas_commitOpenLoop<Policy>::value,
@@ -1006,8 +1011,8 @@ class UnscentedEngine {
   /// Measurement update (docs/algorithms.md §3, Algorithm 1 of the paper). Uses the sigma points of
   /// the last time update as they are (see `redrawPointsForUpdate`); if the filter has none (no time
   /// update since the last update or open-loop propagation), it draws them from the current mean and
-  /// covariance. Returns Ok or Repaired when the update was committed (the covariance is symmetrised
-  /// and checked before it is), MeasurementRejected when the gate refused it, or another refusal.
+  /// covariance. Returns Ok or Repaired when the update was committed (the covariance, exactly symmetric
+  /// as formed, is checked before it is), MeasurementRejected when the gate refused it, or another refusal.
   ///
   /// When the model's measurement depends on the input (`measurementTakesInput`, model.hpp), the input
   /// is the model's `input(t)` at the filter's time, `time()`; a model without `input(t)` must be given
