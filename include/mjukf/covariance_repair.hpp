@@ -46,10 +46,10 @@ SettingsError validateRepair(const char* owner, const CovarianceRepair<Scalar>& 
 }
 
 // A covariance a filter starts from (P₀, or the argument of reset()): symmetric positive definite as
-// given, and still with a Cholesky factor once symmetrised (assign() symmetrises it; every committed P is
-// exactly symmetric). An error naming
-// `setting` otherwise; after it passes, the engine's Estimate::assign() cannot fail on it
-// (detail/unscented_engine.hpp, which also holds the repair itself, CovarianceGuard).
+// given, and still with a Cholesky factor once symmetrised (assign() symmetrises it; every committed P
+// is exactly symmetric). An error naming `setting` otherwise; after it passes, the engine's
+// Estimate::assign() cannot fail on it (detail/unscented_engine.hpp, which also holds the repair
+// itself, CovarianceGuard).
 template <class Derived>
 SettingsError requireCommittableCovariance(const char* owner, const char* setting,
                                            const Eigen::MatrixBase<Derived>& m) {

@@ -546,12 +546,11 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
   /// What every step does with the covariance it is about to commit: check that candidateCovariance()
   /// is finite and has a Cholesky factor, repair it if not (covariance_repair.hpp). Ok, Repaired, or a
   /// refusal. The candidate is exactly symmetric as formed (predict(), predictRandomWalk() and correct()
-  /// compute one triangle and mirror it, or sums whose two triangles are the same products), so it is
-  /// not symmetrised here. Only a covariance accepted here is committed. Square-root form: a factor obtained without
-  /// subtraction is accepted when it is finite with a positive diagonal (Ok; P = S Sᵀ is formed here,
-  /// exactly symmetric), NonFiniteResult otherwise; the full form's P of a step whose factor could not
-  /// be obtained goes through the same check and repair as in the full form, so that every status means
-  /// the same in both forms.
+  /// compute one triangle and mirror it), so it is not symmetrised here. Only a covariance accepted here
+  /// is committed. Square-root form: a factor obtained without subtraction is accepted when it is finite
+  /// with a positive diagonal (Ok; P = S Sᵀ is formed here, exactly symmetric), NonFiniteResult
+  /// otherwise; the full form's P of a step whose factor could not be obtained goes through the same
+  /// check and repair as in the full form, so that every status means the same in both forms.
   Status settle(const CovarianceRepair<Scalar>& repair) {
     if constexpr (SquareRoot) {
       using Candidate = typename SquareRootPart_::Candidate;
@@ -706,7 +705,7 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
         d.innovationCovariance.col(j).setZero();
         d.innovationCovariance(j, j) = Scalar(1);
       }
-    return allFinite(d.innovationCovariance) && choleskyLower(d.innovationCovariance, innovationFactor_);
+    return choleskyLower(d.innovationCovariance, innovationFactor_);  // fails on NaN and ±Inf too
   }
 
   // The posterior factor into sr().candidateFactor (docs/algorithms.md §10), after U = gainFactor_:
