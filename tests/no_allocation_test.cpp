@@ -330,7 +330,8 @@ TEST(NoAllocation, CallsWithoutInput) {
 #ifndef MJUKF_NO_ALLOCATION_CORE
 // The kernels' general forms (matrix products, rank-k update, blocked LLT; detail/linear_algebra.hpp)
 // allocate nothing either: a JUKF at L = 36 and a float UKF at L = 32 on the chain of masses, on the heap
-// (about 190 KB and 60 KB).
+// (about 190 KB and 60 KB), and an automatic MJUKF at n = 20 (Eigen's eigensolver, the joint covariance
+// by blocks).
 template <class Filter>
 void expectNoAllocationAtLargeSize(const typename Filter::Param& theta, const typename Filter::Settings& settings) {
   using Model = typename Filter::Model;
@@ -355,6 +356,12 @@ TEST(NoAllocation, GeneralKernelsAtLargeSize) {
   using UkfF = mjukf::Ukf<ChainF, mjukf::Rk4<float>>;
   expectNoAllocationAtLargeSize<JointD>(ChainD::trueParameters(), mjukf::bench::ChainExperiment<ChainD>::jointUkf());
   expectNoAllocationAtLargeSize<UkfF>(ChainF::trueParameters(), mjukf::bench::ChainExperiment<ChainF>::ukf());
+  // The automatic MJUKF at n = 20: its floor of P⁻ by Eigen's eigensolver (positivePartFactor, from
+  // n = 5), its joint covariance by blocks and one triangle (ParameterErrorCovariance, from n + p = 20).
+  using ChainM = mjukf::bench::Chain<double, 20, 1>;
+  using AutomaticD = mjukf::ModifiedJointUkf<ChainM, mjukf::Rk4<double>>;
+  expectNoAllocationAtLargeSize<AutomaticD>(ChainM::trueParameters(),
+                                            mjukf::bench::ChainExperiment<ChainM>::modifiedJointUkf(true));
 }
 
 #endif

@@ -278,6 +278,60 @@ TEST(ParameterErrorCovariance, AWidenedUpdateIsTheUpdateOfTheWidenedCovariance) 
   EXPECT_TRUE(widenedInCorrect.committed() == widenedAtStart.committed());
 }
 
+// From n + p = 20 (double) the joint covariance is propagated by blocks and by one triangle
+// (ParameterErrorCovariance's ByBlocks): a predict and a correct from the same J and inputs give the two
+// full products' result to rounding (sums of n + p products of entries of size up to about 10, so 64 ε
+// of J's norm per map), and an exactly symmetric J.
+TEST(ParameterErrorCovariance, TheMapsByBlocksAreTheFullProducts) {
+  constexpr int n = 17, m = 5, p = 3;
+  using Blocks = mjukf::detail::ParameterErrorCovariance<double, n, m, p, true>;
+  using Full = mjukf::detail::ParameterErrorCovariance<double, n, m, p, false>;
+  static_assert(std::is_same_v<Blocks, mjukf::detail::ParameterErrorCovariance<double, n, m, p>>,
+                "the default form at n + p = 20");
+  std::mt19937_64 rng(23);
+  Blocks blocks;
+  Full full;
+  const Eigen::Matrix<double, n, n> stateCovariance = mjukf::testing::randomCovariance<n>(rng);
+  const Eigen::Matrix<double, p, p> parameterCovariance = mjukf::testing::randomCovariance<p>(rng);
+  blocks.start(stateCovariance, parameterCovariance);
+  full.start(stateCovariance, parameterCovariance);
+  const auto h = randomNormal<Eigen::Matrix<double, m, n>>(rng);
+  const auto k = randomNormal<Eigen::Matrix<double, n, m>>(rng);
+  const auto g = randomNormal<Eigen::Matrix<double, p, m>>(rng);
+  const auto psi = randomNormal<Eigen::Matrix<double, m, p>>(rng);
+  const auto w = randomNormal<Eigen::Matrix<double, n, p>>(rng);
+  const Eigen::Matrix<double, m, m> r = mjukf::testing::randomCovariance<m>(rng);
+  const auto expectSame = [&](const char* step) {
+    const auto& expected = full.committed();
+    EXPECT_LT((blocks.committed() - expected).cwiseAbs().maxCoeff(),
+              64 * std::numeric_limits<double>::epsilon() * expected.norm())
+        << step;
+    EXPECT_TRUE(blocks.committed() == blocks.committed().transpose()) << step;
+  };
+  ASSERT_TRUE(blocks.correct(h, k, g, psi, w, r, nullptr));
+  ASSERT_TRUE(full.correct(h, k, g, psi, w, r, nullptr));
+  blocks.commit();
+  full.commit();
+  expectSame("correct");
+  // Points whose half differences are well conditioned, so that A is found from them.
+  Blocks::Points prior = randomNormal<Blocks::Points>(rng);
+  prior.middleCols<n>(1) =
+      Eigen::Matrix<double, n, n>::Identity() * 10 + 0.1 * randomNormal<Eigen::Matrix<double, n, n>>(rng);
+  prior.rightCols<n>() = -prior.middleCols<n>(1);
+  const auto propagated = randomNormal<Blocks::Points>(rng);
+  const auto parameterPoints = randomNormal<Blocks::ParamPoints>(rng);
+  const auto sensitivity = randomNormal<Blocks::StateByParam>(rng);
+  const auto derivative = randomNormal<Blocks::StateByParam>(rng);
+  const auto predicted = randomNormal<Blocks::StateByParam>(rng);
+  const Eigen::Matrix<double, n, n> q = mjukf::testing::randomCovariance<n>(rng);
+  const Eigen::Matrix<double, p, p> walk = mjukf::testing::randomCovariance<p>(rng);
+  ASSERT_TRUE(blocks.predict(prior, propagated, parameterPoints, sensitivity, &derivative, predicted, q, walk, 1.5));
+  ASSERT_TRUE(full.predict(prior, propagated, parameterPoints, sensitivity, &derivative, predicted, q, walk, 1.5));
+  blocks.commit();
+  full.commit();
+  expectSame("predict");
+}
+
 // The test's threshold, χ²ₚ's upper quantile, against the closed forms of the tail: P(χ²₁ > x) =
 // erfc(√(x/2)), P(χ²₂ > x) = e^(−x/2), P(χ²₄ > x) = e^(−x/2)(1 + x/2). Its asymptotic form is exact for
 // p = 2 and 4 and off by the series' next term, (s − 1)(s − 2)/y² = 0.75/y² for p = 1 (y = x/2).

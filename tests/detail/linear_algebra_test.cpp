@@ -174,6 +174,36 @@ void expectPositivePartMatchesEigen(std::mt19937_64& rng) {
   EXPECT_LT((e * e.transpose() - positive).norm(), 8 * N * kEps * a.norm()) << a;
 }
 
+// From N = 5 positivePartFactor takes Eigen's tridiagonal solver instead of Jacobi rotations: the two
+// algorithms agree to the same bound, and the result has the positive part's defining properties:
+// A⁺ − A = A⁻ is positive semi-definite and A⁺ A⁻ = 0 (the two parts live on orthogonal eigenspaces).
+template <int N>
+void expectTridiagonalPositivePartMatchesJacobi(std::mt19937_64& rng) {
+  using Matrix = Eigen::Matrix<double, N, N>;
+  Matrix a = mjukf::testing::randomNormal<Matrix>(rng);
+  a = (a + a.transpose()).eval();
+  Matrix byRotations, bySolver;
+  ASSERT_TRUE(mjukf::detail::positivePartFactorJacobi(a, byRotations));
+  ASSERT_TRUE(mjukf::detail::positivePartFactor(a, bySolver));
+  const Matrix positive = bySolver * bySolver.transpose();
+  const double bound = 8 * N * kEps * a.norm();
+  EXPECT_LT((byRotations * byRotations.transpose() - positive).norm(), bound);
+  const Matrix negative = positive - a;
+  EXPECT_GT(Eigen::SelfAdjointEigenSolver<Matrix>(negative).eigenvalues().minCoeff(), -bound);
+  EXPECT_LT((positive * negative).norm(), bound * a.norm());
+}
+
+TEST(LinearAlgebra, PositivePartFactorBySolverMatchesRotations) {
+  static_assert(mjukf::detail::kTridiagonalPositivePartFrom == 5);
+  std::mt19937_64 rng(17);
+  for (int trial = 0; trial < 20; ++trial) {
+    expectTridiagonalPositivePartMatchesJacobi<5>(rng);
+    expectTridiagonalPositivePartMatchesJacobi<8>(rng);
+    expectTridiagonalPositivePartMatchesJacobi<16>(rng);
+    expectTridiagonalPositivePartMatchesJacobi<32>(rng);
+  }
+}
+
 TEST(LinearAlgebra, PositivePartFactorIsThePositiveSemiDefinitePart) {
   std::mt19937_64 rng(11);
   for (int trial = 0; trial < 50; ++trial) {

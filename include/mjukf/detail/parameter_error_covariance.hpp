@@ -13,7 +13,13 @@
 
 namespace mjukf::detail {
 
-template <class Scalar, int N, int M, int P>
+/// `ByBlocks`: from the size where a product into one triangle is faster than the full product (the
+/// covariance kernel's measured border, linear_algebra.hpp), the joint covariance is propagated by blocks
+/// and by its lower triangle, mirrored (exactly symmetric); below it, as two full products and an average
+/// with the transpose, which keeps the paper's and the gallery's plants (n + p ≤ 8) to the bit. A
+/// parameter only so that a test can run both forms at one size.
+template <class Scalar, int N, int M, int P,
+          bool ByBlocks = atLeast<N + P>(generalKernelsFrom<Scalar>.covarianceTriangle)>
 class ParameterErrorCovariance {
  public:
   using Joint = Eigen::Matrix<Scalar, N + P, N + P>;
@@ -85,8 +91,20 @@ class ParameterErrorCovariance {
     StateByParam drift = extrapolation * effect_ - predictedSensitivity;
     drift.noalias() += jacobian_ * sensitivity;
     transition_.template topRightCorner<N, P>() = drift;
-    spreadJoint_.noalias() = transition_ * joint_;
-    candidate_.noalias() = spreadJoint_ * transition_.transpose();
+    if constexpr (ByBlocks) {
+      // Z = [[A, C], [0, I]]: (Z J Zᵀ)_ηη = [A C] J [A C]ᵀ by one triangle, (Z J Zᵀ)_eη = (([A C] J)_·e)ᵀ
+      // and J_ee unchanged (e's rows are not multiplied through); the lower triangle, mirrored.
+      const auto stateRows = transition_.template topRows<N>();
+      spreadJoint_.template topRows<N>().noalias() = stateRows * joint_;
+      candidate_.template topLeftCorner<N, N>().template triangularView<Eigen::Lower>() =
+          spreadJoint_.template topRows<N>() * stateRows.transpose();
+      candidate_.template bottomLeftCorner<P, N>() = spreadJoint_.template topRightCorner<N, P>().transpose();
+      candidate_.template bottomRightCorner<P, P>() = joint_.template bottomRightCorner<P, P>();
+      mirrorLowerTriangle(candidate_);
+    } else {
+      spreadJoint_.noalias() = transition_ * joint_;
+      candidate_.noalias() = spreadJoint_ * transition_.transpose();
+    }
     candidate_.template topLeftCorner<N, N>() += processNoise;
     if (!parameterProcessNoise.isZero(Scalar(0))) {
       const StateByParam walk = predictedSensitivity * parameterProcessNoise;  // W⁻ Q_θ
@@ -154,11 +172,17 @@ class ParameterErrorCovariance {
     noiseMap_.template topRows<N>().noalias() += correctedSensitivity * parameterGain;
     noiseMap_.template bottomRows<P>() = -parameterGain;
     spreadJoint_.noalias() = transition_ * priorWidenedBy(widening);  // the committed prediction
-    corrected_.noalias() = spreadJoint_ * transition_.transpose();
     noiseSpread_.noalias() = noiseMap_ * measurementNoise;
-    corrected_.noalias() += noiseSpread_ * noiseMap_.transpose();
-    spreadJoint_ = corrected_.transpose();  // symmetric as committed
-    candidate_ = (corrected_ + spreadJoint_) * Scalar(0.5);
+    if constexpr (ByBlocks) {  // one triangle of Z J⁻ Zᵀ + V R Vᵀ, mirrored
+      candidate_.template triangularView<Eigen::Lower>() = spreadJoint_ * transition_.transpose();
+      candidate_.template triangularView<Eigen::Lower>() += noiseSpread_ * noiseMap_.transpose();
+      mirrorLowerTriangle(candidate_);
+    } else {
+      corrected_.noalias() = spreadJoint_ * transition_.transpose();
+      corrected_.noalias() += noiseSpread_ * noiseMap_.transpose();
+      spreadJoint_ = corrected_.transpose();  // symmetric as committed
+      candidate_ = (corrected_ + spreadJoint_) * Scalar(0.5);
+    }
     return allFinite(candidate_);
   }
 
