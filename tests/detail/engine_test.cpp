@@ -279,9 +279,9 @@ TEST(ParameterErrorCovariance, AWidenedUpdateIsTheUpdateOfTheWidenedCovariance) 
 }
 
 // From n + p = 20 (double) the joint covariance is propagated by blocks and by one triangle
-// (ParameterErrorCovariance's ByBlocks): a predict and a correct from the same J and inputs give the two
-// full products' result to rounding (sums of n + p products of entries of size up to about 10, so 64 ε
-// of J's norm per map), and an exactly symmetric J.
+// (ParameterErrorCovariance's ByBlocks): a predict (with Q and a random walk Q_θ) and a correct from the
+// same J and inputs give the two full products' result to rounding (sums of n + p products of entries of
+// size up to about 10, so 64 ε of J's norm per map), and an exactly symmetric J.
 TEST(ParameterErrorCovariance, TheMapsByBlocksAreTheFullProducts) {
   constexpr int n = 17, m = 5, p = 3;
   using Blocks = mjukf::detail::ParameterErrorCovariance<double, n, m, p, true>;
@@ -308,6 +308,9 @@ TEST(ParameterErrorCovariance, TheMapsByBlocksAreTheFullProducts) {
         << step;
     EXPECT_TRUE(blocks.committed() == blocks.committed().transpose()) << step;
   };
+  // Each step of `blocks` twice before its commit: the second must not read what the first left in the
+  // candidate (every entry of its lower triangle written anew).
+  ASSERT_TRUE(blocks.correct(h, k, g, psi, w, r, nullptr));
   ASSERT_TRUE(blocks.correct(h, k, g, psi, w, r, nullptr));
   ASSERT_TRUE(full.correct(h, k, g, psi, w, r, nullptr));
   blocks.commit();
@@ -325,6 +328,7 @@ TEST(ParameterErrorCovariance, TheMapsByBlocksAreTheFullProducts) {
   const auto predicted = randomNormal<Blocks::StateByParam>(rng);
   const Eigen::Matrix<double, n, n> q = mjukf::testing::randomCovariance<n>(rng);
   const Eigen::Matrix<double, p, p> walk = mjukf::testing::randomCovariance<p>(rng);
+  ASSERT_TRUE(blocks.predict(prior, propagated, parameterPoints, sensitivity, &derivative, predicted, q, walk, 1.5));
   ASSERT_TRUE(blocks.predict(prior, propagated, parameterPoints, sensitivity, &derivative, predicted, q, walk, 1.5));
   ASSERT_TRUE(full.predict(prior, propagated, parameterPoints, sensitivity, &derivative, predicted, q, walk, 1.5));
   blocks.commit();

@@ -184,7 +184,7 @@ void expectTridiagonalPositivePartMatchesJacobi(std::mt19937_64& rng) {
   a = (a + a.transpose()).eval();
   Matrix byRotations, bySolver;
   ASSERT_TRUE(mjukf::detail::positivePartFactorJacobi(a, byRotations));
-  ASSERT_TRUE(mjukf::detail::positivePartFactor(a, bySolver));
+  ASSERT_TRUE(mjukf::detail::positivePartFactorTridiagonal(a, bySolver));
   const Matrix positive = bySolver * bySolver.transpose();
   const double bound = 8 * N * kEps * a.norm();
   EXPECT_LT((byRotations * byRotations.transpose() - positive).norm(), bound);
@@ -201,6 +201,21 @@ TEST(LinearAlgebra, PositivePartFactorBySolverMatchesRotations) {
     expectTridiagonalPositivePartMatchesJacobi<8>(rng);
     expectTridiagonalPositivePartMatchesJacobi<16>(rng);
     expectTridiagonalPositivePartMatchesJacobi<32>(rng);
+  }
+  // Both scale A by a power of two first: the all-ones 8 × 8 times max/4 has the eigenvalue 2 max, whose
+  // square root is finite (Eigen's own scaling by the largest entry overflowed it), and a subnormal A is
+  // decomposed (2⁻ᵏ for its k overflowed in one power). The positive part of c 1 1ᵀ is all of it.
+  using Matrix8 = Eigen::Matrix<double, 8, 8>;
+  for (const double c : {std::numeric_limits<double>::max() / 4, 1e-310}) {
+    const Matrix8 a = Matrix8::Constant(c);
+    Matrix8 bySolver, byRotations;
+    ASSERT_TRUE(mjukf::detail::positivePartFactorTridiagonal(a, bySolver)) << c;
+    ASSERT_TRUE(mjukf::detail::positivePartFactorJacobi(a, byRotations)) << c;
+    // Compared as (E Eᵀ) / c entry by entry, E / √c first so that nothing overflows.
+    for (const Matrix8* e : {&bySolver, &byRotations}) {
+      const Matrix8 unit = *e / std::sqrt(c);
+      EXPECT_LT((unit * unit.transpose() - Matrix8::Ones()).cwiseAbs().maxCoeff(), 64 * kEps) << c;
+    }
   }
 }
 

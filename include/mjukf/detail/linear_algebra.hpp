@@ -697,21 +697,33 @@ Eigen::Matrix<Scalar, N, N> psdSquareRoot(const Eigen::Matrix<Scalar, N, N>& q) 
 
 // ---- The positive semi-definite part of a symmetric matrix -------------------------------------------------
 
+// A scaled by an even power of two, 4⁻ᵏ A with its largest entry in [1/4, 1), into `scaled`; returns k.
+// Exact (no rounding unless entries fall below the smallest normal number), so a positive part computed
+// on it and multiplied by 2ᵏ is the unscaled computation's bit for bit, but the squares of a finite A
+// near the overflow threshold (a P_θ that has grown without bound) and its eigenvalues no longer
+// overflow. The power is applied in two halves, so that a subnormal A does not need 2¹⁰⁷⁴.
+template <class Scalar, int N>
+int scaleToUnitRange(const Eigen::Matrix<Scalar, N, N>& a, Eigen::Matrix<Scalar, N, N>& scaled) {
+  int exponent = 0;
+  std::frexp(a.cwiseAbs().maxCoeff(), &exponent);  // largest = f 2^exponent, f ∈ [1/2, 1)
+  exponent += exponent & 1;                        // even: √ of the scale is exact
+  const Scalar half = std::ldexp(Scalar(1), -exponent / 2);
+  scaled = a * half;
+  scaled *= half;
+  return exponent / 2;
+}
+
 // E with E Eᵀ = A⁺, the positive semi-definite part of the symmetric A (its eigenvalues below zero set to
 // zero), by cyclic Jacobi rotations: A = V D Vᵀ, E = V √max(D, 0). Each sweep rotates every off-diagonal
 // pair to zero; the loop stops when the off-diagonal mass is below ε² of A's (or after 32 sweeps, which no
-// finite A has needed). Reads the whole of A (symmetric as given). Returns false, E then unspecified, when
-// A is not finite. It works on A scaled by an even power of two, 4⁻ᵏ A with largest entry in [1/4, 1):
-// exact, so the result is the unscaled computation's bit for bit, but a finite A of entries near the
-// overflow threshold (a P_θ that has grown without bound) no longer overflows the stopping test's |A|²_F.
+// finite A has needed). Reads the whole of A (symmetric as given), scaled (scaleToUnitRange). Returns
+// false, E then unspecified, when A is not finite.
 template <class Scalar, int N>
 bool positivePartFactorJacobi(const Eigen::Matrix<Scalar, N, N>& a, Eigen::Matrix<Scalar, N, N>& factor) {
   using Matrix = Eigen::Matrix<Scalar, N, N>;
   if (!allFinite(a)) return false;
-  int exponent = 0;
-  std::frexp(a.cwiseAbs().maxCoeff(), &exponent);  // largest = f 2^exponent, f ∈ [1/2, 1)
-  exponent += exponent & 1;                        // even: √ of the scale is exact
-  Matrix d = a * std::ldexp(Scalar(1), -exponent);
+  Matrix d;
+  const int power = scaleToUnitRange(a, d);
   Matrix v = Matrix::Identity();
   const Scalar scale = d.squaredNorm();
   const Scalar epsilon = std::numeric_limits<Scalar>::epsilon();
@@ -729,41 +741,49 @@ bool positivePartFactorJacobi(const Eigen::Matrix<Scalar, N, N>& a, Eigen::Matri
         v.applyOnTheRight(p, q, rotation);
       }
   }
-  const Scalar root = std::ldexp(Scalar(1), exponent / 2);
+  const Scalar root = std::ldexp(Scalar(1), power);
   for (int j = 0; j < N; ++j) factor.col(j) = v.col(j) * (std::sqrt(std::max(d(j, j), Scalar(0))) * root);
   return allFinite(factor);
 }
 
 // The same by Eigen's SelfAdjointEigenSolver (Householder tridiagonalisation, then implicit QR on the
-// tridiagonal), which reads the lower triangle of A and scales it by its largest entry itself. Its
-// Householder back-transformation takes a blocked path with dynamic-size temporaries from size 48, so
-// it is used below that only (see positivePartFactor). A solver that did not converge (no finite A has
-// been seen to) falls back to the rotations.
+// tridiagonal), on A scaled as the rotations take it (the solver's own scaling, by the largest entry,
+// is not exact and let eigenvalues near the largest finite number overflow). It reads the lower
+// triangle of A. A solver that did not converge (no finite A has been seen to) falls back to the
+// rotations.
 template <class Scalar, int N>
 bool positivePartFactorTridiagonal(const Eigen::Matrix<Scalar, N, N>& a, Eigen::Matrix<Scalar, N, N>& factor) {
   using Matrix = Eigen::Matrix<Scalar, N, N>;
   if (!allFinite(a)) return false;
-  const Eigen::SelfAdjointEigenSolver<Matrix> solver(a);
+  Matrix scaled;
+  const Scalar root = std::ldexp(Scalar(1), scaleToUnitRange(a, scaled));
+  const Eigen::SelfAdjointEigenSolver<Matrix> solver(scaled);
   if (solver.info() != Eigen::Success) return positivePartFactorJacobi(a, factor);
   for (int j = 0; j < N; ++j)
-    factor.col(j) = solver.eigenvectors().col(j) * std::sqrt(std::max(solver.eigenvalues()(j), Scalar(0)));
+    factor.col(j) = solver.eigenvectors().col(j) * (std::sqrt(std::max(solver.eigenvalues()(j), Scalar(0))) * root);
   return allFinite(factor);
 }
 
 // The positive semi-definite part, E with E Eᵀ = A⁺, by the faster of the two for the size, chosen at
-// compile time: the rotations up to N = 4, Eigen's tridiagonal solver from 5 up to 47. Measured
-// standalone (g++ -O3, a random indefinite A; double, float): N = 4 1.1, 1.0 µs by rotations against
-// 1.3, 0.95 by the solver; N = 5 2.6, 1.8 against 1.9, 1.3; N = 8 9.6 against 4.2; N = 16 94 against 20;
-// N = 32 420 against 83 (the automatic MJUKF's step on a chain of 32 states spent three quarters of its
-// time in the rotations). Both are backward stable and A → A⁺ is 1-Lipschitz, so the two agree to
-// rounding (tests/detail/linear_algebra_test.cpp); every plant of the library has N ≤ 4, whose results
-// are the rotations' as before. From 48 the solver would allocate, so the rotations are used again.
+// compile time: the rotations up to N = 4, Eigen's tridiagonal solver from 5. Measured standalone
+// (g++ -O3, a random indefinite A; double, float): N = 4 1.1, 1.0 µs by rotations against 1.3, 0.95 by
+// the solver; N = 5 2.6, 1.8 against 1.9, 1.3; N = 8 9.6 against 4.2; N = 16 94 against 20; N = 32 420
+// against 83 (the automatic MJUKF's step on a chain of 32 states spent three quarters of its time in the
+// rotations). Both are backward stable and A → A⁺ is 1-Lipschitz, so the two agree to rounding
+// (tests/detail/linear_algebra_test.cpp); every plant of the library has N ≤ 4, whose results are the
+// rotations' as before. The solver allocates nothing at these fixed sizes (its Householder sequence is
+// formed in place, tests/no_allocation_test.cpp), but its code holds a blocked path with dynamic-size
+// temporaries that is compiled in, so a firmware image that must not link malloc defines
+// MJUKF_POSITIVE_PART_BY_ROTATIONS for the rotations at every size (docs/embedded.md).
+#ifdef MJUKF_POSITIVE_PART_BY_ROTATIONS
+inline constexpr int kTridiagonalPositivePartFrom = std::numeric_limits<int>::max();
+#else
 inline constexpr int kTridiagonalPositivePartFrom = 5;
-inline constexpr int kTridiagonalPositivePartUpTo = 47;
+#endif
 
 template <class Scalar, int N>
 bool positivePartFactor(const Eigen::Matrix<Scalar, N, N>& a, Eigen::Matrix<Scalar, N, N>& factor) {
-  if constexpr (N != Eigen::Dynamic && N >= kTridiagonalPositivePartFrom && N <= kTridiagonalPositivePartUpTo)
+  if constexpr (N != Eigen::Dynamic && N >= kTridiagonalPositivePartFrom)
     return positivePartFactorTridiagonal(a, factor);
   else
     return positivePartFactorJacobi(a, factor);

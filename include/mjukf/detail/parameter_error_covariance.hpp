@@ -93,14 +93,14 @@ class ParameterErrorCovariance {
     transition_.template topRightCorner<N, P>() = drift;
     if constexpr (ByBlocks) {
       // Z = [[A, C], [0, I]]: (Z J Zᵀ)_ηη = [A C] J [A C]ᵀ by one triangle, (Z J Zᵀ)_eη = (([A C] J)_·e)ᵀ
-      // and J_ee unchanged (e's rows are not multiplied through); the lower triangle, mirrored.
+      // and J_ee unchanged (e's rows are not multiplied through); the lower triangle is mirrored once Q and
+      // the walk are in.
       const auto stateRows = transition_.template topRows<N>();
       spreadJoint_.template topRows<N>().noalias() = stateRows * joint_;
       candidate_.template topLeftCorner<N, N>().template triangularView<Eigen::Lower>() =
           spreadJoint_.template topRows<N>() * stateRows.transpose();
       candidate_.template bottomLeftCorner<P, N>() = spreadJoint_.template topRightCorner<N, P>().transpose();
       candidate_.template bottomRightCorner<P, P>() = joint_.template bottomRightCorner<P, P>();
-      mirrorLowerTriangle(candidate_);
     } else {
       spreadJoint_.noalias() = transition_ * joint_;
       candidate_.noalias() = spreadJoint_ * transition_.transpose();
@@ -113,6 +113,7 @@ class ParameterErrorCovariance {
       candidate_.template bottomLeftCorner<P, N>() -= walk.transpose();
       candidate_.template bottomRightCorner<P, P>() += parameterProcessNoise;
     }
+    if constexpr (ByBlocks) mirrorLowerTriangle(candidate_);  // Q and the walk included
     return found;
   }
 
