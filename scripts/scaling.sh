@@ -28,11 +28,14 @@ if [[ ${MJUKF_SCALING_SKIP_BUILD:-0} != 1 ]]; then
   cmake --build "$build" -j "$jobs" --target "${targets[@]}"
 fi
 
-echo "\`--benchmark_repetitions=5 --benchmark_min_time=${MJUKF_SCALING_MIN_TIME:-0.5}\`" > "$results/scaling.options"
+# The repetitions in random order across all cases (Google Benchmark's random interleaving), so that a
+# burst of load on the shared machine spreads over the cases instead of falling on a few neighbours (a
+# step measured under it and its floor not).
+echo "\`--benchmark_repetitions=5 --benchmark_enable_random_interleaving=true --benchmark_min_time=${MJUKF_SCALING_MIN_TIME:-0.5}\`" > "$results/scaling.options"
 run() {  # run <program> <name>
   uptime | sed 's/.*load average: //' > "$results/$2.load"
-  "$build/bench/$1" --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
-    --benchmark_min_time="${MJUKF_SCALING_MIN_TIME:-0.5}" \
+  "$build/bench/$1" --benchmark_repetitions=5 --benchmark_enable_random_interleaving=true \
+    --benchmark_report_aggregates_only=true --benchmark_min_time="${MJUKF_SCALING_MIN_TIME:-0.5}" \
     --benchmark_out="$results/$2.json" --benchmark_out_format=json
 }
 run mjukf_scaling_bench scaling
