@@ -157,6 +157,7 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
     const Param& theta = stateFilterParameters();
     for (int i = 0; i < Base::Count; ++i) points.col(i) = step.propagate(theta, points.col(i));
   }
+  static constexpr bool raisesPriorCovariance = false;
   const typename Est::Matrix* priorCovarianceFloor() const { return nullptr; }  // Q alone
   template <class Step>
   Vector propagateMean(const Step& step, const Vector& mean) {

@@ -55,6 +55,7 @@ class AugmentedParameters : public ParameterPolicy<Model, Integrator, Settings, 
       points.col(i).template head<StateDim>() = step.propagate(theta, points.col(i).template head<StateDim>());
     }
   }
+  static constexpr bool raisesPriorCovariance = false;
   const typename Est::Matrix* priorCovarianceFloor() const { return nullptr; }  // Q alone
   template <class Step>
   Vector propagateMean(const Step& step, const Vector& z) {

@@ -309,6 +309,7 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
         errorCovariance_.stateErrorCovariance(sensitivity_.candidateStateSensitivity(), stateErrorCovariance_);
   }
   // Σ = cov(η + W⁻ e) for this time update's P⁻ to cover (parameterUncertaintyInState), or null.
+  static constexpr bool raisesPriorCovariance = Automatic;
   const typename Est::Matrix* priorCovarianceFloor() const {
     if constexpr (Automatic)
       if (coversParameterError_) return &stateErrorCovariance_;

@@ -393,6 +393,10 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
   /// Householder, then a rank-one downdate by √|Wcᵢ| (χᵢ⁺ − x̂⁻) for each Wcᵢ < 0, then with a floor S⁻
   /// from [S⁻ | E] (and the prior's points count as Other: the posterior is a downdate of S⁻); when a
   /// factor fails, the full form's P⁻ for settle() to check and repair.
+  /// `MayRaise` false (a policy whose priorCovarianceFloor() is always null): the raise is not compiled
+  /// in, so that such a filter's code holds no positive part (from n = 5 Eigen's eigensolver, which
+  /// links malloc into a firmware image).
+  template <bool MayRaise = true>
   void predict(const Matrix& processNoise, const Matrix* floor = nullptr) {
     weightedMean(workPoints(), sigmaPoints_.meanWeights(), candidateMean_);
     deviations_.noalias() = workPoints().colwise() - candidateMean_;
@@ -401,8 +405,9 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
       sr().predictedMean = candidateMean_;
       sr().workPrior = floor ? PriorPoints::Other : PriorPoints::Predicted;
       sr().predictionStack.template rightCols<L>() = sr().processNoiseRoot;
-      if (weightedFactor(deviations_, sr().predictionStack, sr().candidateFactor) &&
-          (!floor || raiseFactorToFloor(*floor))) {
+      bool factored = weightedFactor(deviations_, sr().predictionStack, sr().candidateFactor);
+      if constexpr (MayRaise) factored = factored && (!floor || raiseFactorToFloor(*floor));
+      if (factored) {
         sr().candidate = SquareRootPart_::Candidate::Factor;
         return;
       }
@@ -412,7 +417,8 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
     weightedCovarianceLower(deviations_, sigmaPoints_.covarianceWeights(), candidateCovariance_);
     candidateCovariance_ += processNoise;
     mirrorLowerTriangle(candidateCovariance_);
-    if (floor) raiseToFloor(*floor, candidateCovariance_);
+    if constexpr (MayRaise)
+      if (floor) raiseToFloor(*floor, candidateCovariance_);
   }
 
   /// E with E Eᵀ the positive semi-definite part of floor − P (1-Lipschitz in both: the rounding of the
@@ -897,6 +903,16 @@ struct ParameterPolicy {
   using CheckCorrection = Correction<Model, Settings, Est>;
 };
 
+// Whether a policy's priorCovarianceFloor() can return a covariance: its `static constexpr bool
+// raisesPriorCovariance`, true where it does not say (the raise is then compiled in, as it must be for a
+// floor to be honoured). The UKF's, JUKF's and dual's policies, and the MJUKF's without its automatic
+// modes, say false.
+template <class P, class = void>
+inline constexpr bool raisesPriorCovariance = true;
+template <class P>
+inline constexpr bool raisesPriorCovariance<P, std::void_t<decltype(P::raisesPriorCovariance)>> =
+    P::raisesPriorCovariance;
+
 /// \endcond
 
 // ==== 4. The engine ===================================================================================
@@ -1306,7 +1322,7 @@ class UnscentedEngine {
   Status predict(const StepType& step, const Vector& mean, const Matrix& lowerFactor) {
     if (const Status s = estimate_.draw(mean, lowerFactor); s != Status::Ok) return s;
     policy_.propagatePoints(step, estimate_.workPoints());
-    estimate_.predict(settings_.processNoise, policy_.priorCovarianceFloor());
+    estimate_.template predict<raisesPriorCovariance<Policy>>(settings_.processNoise, policy_.priorCovarianceFloor());
     // The points are committed with the prediction, and are not checked apart: a NaN or ±Inf among them
     // makes x̂⁻ = Σ Wmᵢ χᵢ⁺ NaN or ±Inf (even with a zero weight: 0 · NaN and 0 · Inf are NaN), checked here.
     if (!allFinite(estimate_.candidateMean())) return Status::NonFiniteResult;
