@@ -164,8 +164,7 @@ TEST(LinearAlgebra, FinitenessChecks) {
 template <int N>
 void expectPositivePartMatchesEigen(std::mt19937_64& rng) {
   using Matrix = Eigen::Matrix<double, N, N>;
-  Matrix a = mjukf::testing::randomNormal<Matrix>(rng);
-  a = (a + a.transpose()).eval();  // indefinite, in general
+  const Matrix a = mjukf::testing::randomSymmetric<N>(rng);
   Matrix e;
   ASSERT_TRUE(mjukf::detail::positivePartFactor(a, e));
   const Eigen::SelfAdjointEigenSolver<Matrix> reference(a);
@@ -180,8 +179,7 @@ void expectPositivePartMatchesEigen(std::mt19937_64& rng) {
 template <int N>
 void expectTridiagonalPositivePartMatchesJacobi(std::mt19937_64& rng) {
   using Matrix = Eigen::Matrix<double, N, N>;
-  Matrix a = mjukf::testing::randomNormal<Matrix>(rng);
-  a = (a + a.transpose()).eval();
+  const Matrix a = mjukf::testing::randomSymmetric<N>(rng);
   Matrix byRotations, bySolver;
   ASSERT_TRUE(mjukf::detail::positivePartFactorJacobi(a, byRotations));
   ASSERT_TRUE(mjukf::detail::positivePartFactorTridiagonal(a, bySolver));

@@ -21,8 +21,7 @@ namespace {
 template <int N>
 void expectRotations(std::mt19937_64& rng) {
   using Matrix = Eigen::Matrix<double, N, N>;
-  Matrix a = mjukf::testing::randomNormal<Matrix>(rng);
-  a = (a + a.transpose()).eval();
+  const Matrix a = mjukf::testing::randomSymmetric<N>(rng);
   Matrix dispatched, byRotations;
   ASSERT_TRUE(mjukf::detail::positivePartFactor(a, dispatched));
   ASSERT_TRUE(mjukf::detail::positivePartFactorJacobi(a, byRotations));

@@ -68,6 +68,13 @@ Matrix randomNormal(std::mt19937_64& rng) {
   return m;
 }
 
+/// A symmetric N × N matrix, A + Aᵀ of a standard normal A: indefinite, in general.
+template <int N>
+Eigen::Matrix<double, N, N> randomSymmetric(std::mt19937_64& rng) {
+  const auto a = randomNormal<Eigen::Matrix<double, N, N>>(rng);
+  return a + a.transpose();
+}
+
 /// A random symmetric positive definite matrix with correlations, condition number moderate.
 template <int N>
 Eigen::Matrix<double, N, N> randomCovariance(std::mt19937_64& rng, double scale = 1.0) {

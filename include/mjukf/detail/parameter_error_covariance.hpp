@@ -179,10 +179,10 @@ class ParameterErrorCovariance {
       candidate_.template triangularView<Eigen::Lower>() += noiseSpread_ * noiseMap_.transpose();
       mirrorLowerTriangle(candidate_);
     } else {
-      corrected_.noalias() = spreadJoint_ * transition_.transpose();
-      corrected_.noalias() += noiseSpread_ * noiseMap_.transpose();
-      spreadJoint_ = corrected_.transpose();  // symmetric as committed
-      candidate_ = (corrected_ + spreadJoint_) * Scalar(0.5);
+      candidate_.noalias() = spreadJoint_ * transition_.transpose();
+      candidate_.noalias() += noiseSpread_ * noiseMap_.transpose();
+      spreadJoint_ = candidate_.transpose();  // symmetric as committed
+      candidate_ = (candidate_ + spreadJoint_) * Scalar(0.5);
     }
     return allFinite(candidate_);
   }
@@ -223,7 +223,7 @@ class ParameterErrorCovariance {
   // Workspace.
   StateMatrix spread_ = StateMatrix::Zero(), change_ = StateMatrix::Zero(), jacobian_ = StateMatrix::Zero();
   Eigen::Matrix<Scalar, P, N> parameterSpread_ = Eigen::Matrix<Scalar, P, N>::Zero();
-  Joint transition_ = Joint::Zero(), spreadJoint_ = Joint::Zero(), corrected_ = Joint::Zero();
+  Joint transition_ = Joint::Zero(), spreadJoint_ = Joint::Zero();
   Eigen::Matrix<Scalar, N + P, M> noiseMap_ = Eigen::Matrix<Scalar, N + P, M>::Zero();
   Eigen::Matrix<Scalar, N + P, M> noiseSpread_ = Eigen::Matrix<Scalar, N + P, M>::Zero();
   StateByParam carried_ = StateByParam::Zero();                                         // cov(x̃, e) = J_ηe + W P_θ

@@ -808,6 +808,9 @@ struct Correction {
 //   template <class Step> Status predictParameters(const Step&, const Est& state);   before the state's points
 //   template <class Step> void propagatePoints(const Step&, Points& points);          χᵢ⁺ = Φ(χᵢ), in place
 //   const Matrix* priorCovarianceFloor() const;       a covariance this time update's P⁻ must cover, or null
+//   static constexpr bool raisesPriorCovariance;      optional, the one member with a default (true, always
+//                                                    safe): false when the floor is always null, so that
+//                                                    the raise is not compiled in
 //   template <class Step> Vector propagateMean(const Step&, const Vector& mean);      the open-loop mean
 //   void measurePoints(const Model&, const Input& u, const Points& points, MeasPoints& measured);
 //                                                    Yᵢ = g(χᵢ, u)
