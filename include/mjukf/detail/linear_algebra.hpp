@@ -195,6 +195,15 @@ void solveUpperInPlace(const Lower& s, Rhs& b) {
   }
 }
 
+// Whether every entry above the diagonal is exactly zero (a NaN there is not).
+template <class Matrix>
+bool isLowerTriangular(const Matrix& m) {
+  for (int j = 1; j < int(m.cols()); ++j)
+    for (int i = 0; i < j && i < int(m.rows()); ++i)
+      if (!(m(i, j) == 0)) return false;
+  return true;
+}
+
 // B ← M⁻¹ B for the M whose PartialPivLU is `lu` (P M = L U, L unit lower and U both in matrixLU()), by
 // substitution a row at a time. Eigen's own solve with a matrix right-hand side takes the blocked
 // level-3 path, whose workspace fallback links malloc and free into a firmware image.

@@ -71,16 +71,24 @@ class ParameterErrorCovariance {
       change_.col(j) = (propagated.col(1 + j) - propagated.col(1 + N + j)) * Scalar(0.5);
       parameterSpread_.col(j) = (parameterPoints.col(1 + j) - parameterPoints.col(1 + N + j)) * Scalar(0.5);
     }
+    // Points drawn from a lower factor (every filter's) have half differences γL, lower triangular; from
+    // n + p = 20 A then needs no n × n LU (below, the code is the paper's plants' and the gallery's, to the
+    // bit).
+    bool byTriangle = false;
+    if constexpr (ByBlocks) byTriangle = isLowerTriangular(spread_);
     if (derivative) {
       change_.noalias() -= *derivative * parameterSpread_;
-      spread_.noalias() -= sensitivity * parameterSpread_;
+      if (!byTriangle) spread_.noalias() -= sensitivity * parameterSpread_;
     } else {
       change_.noalias() -= effect_ * parameterSpread_;
     }
-    // A = change · spread⁻¹, i.e. spreadᵀ Aᵀ = changeᵀ.
-    StateMatrix transposed = change_.transpose();
-    luSolveInPlace(spread_.transpose().partialPivLu(), transposed);
-    jacobian_ = transposed.transpose();
+    if (byTriangle) {
+      jacobianByTriangle(change_, spread_, derivative ? &sensitivity : nullptr, parameterSpread_, jacobian_);
+    } else {  // A = change · spread⁻¹, i.e. spreadᵀ Aᵀ = changeᵀ
+      StateMatrix transposed = change_.transpose();
+      luSolveInPlace(spread_.transpose().partialPivLu(), transposed);
+      jacobian_ = transposed.transpose();
+    }
     const bool found = allFinite(jacobian_);
     if (!found) jacobian_.setIdentity();
     if (derivative && found) effect_ = *derivative - jacobian_ * sensitivity;  // B
@@ -115,6 +123,29 @@ class ParameterErrorCovariance {
     }
     if constexpr (ByBlocks) mirrorLowerTriangle(candidate_);  // Q and the walk included
     return found;
+  }
+
+  /// A with A (T − W ϑ) = `change` for a lower-triangular T (`triangle`), W = `sensitivity` (null: W ϑ
+  /// absent) and ϑ = `parameterSpread`, into `jacobian`: X = change T⁻¹ by substitution, and then by
+  /// Woodbury's identity (T − W ϑ)⁻¹ = T⁻¹ + T⁻¹ W C⁻¹ ϑ T⁻¹ with C = I − ϑ T⁻¹ W (p × p),
+  /// A = X + (X W) C⁻¹ (ϑ T⁻¹): about n³/2 multiply-adds and O(n² p), where the LU of T − W ϑ and its
+  /// solve for n right-hand sides take 4n³/3. Not finite when T or C is singular.
+  static void jacobianByTriangle(const StateMatrix& change, const StateMatrix& triangle,
+                                 const StateByParam* sensitivity, const Eigen::Matrix<Scalar, P, N>& parameterSpread,
+                                 StateMatrix& jacobian) {
+    jacobian = change;
+    rightSolveLowerInPlace(triangle, jacobian);  // X = change T⁻¹
+    if (!sensitivity) return;
+    StateByParam whitened = *sensitivity;
+    solveLowerInPlace(triangle, whitened);  // T⁻¹ W
+    ParamMatrix c = ParamMatrix::Identity();
+    c.noalias() -= parameterSpread * whitened;  // C = I − ϑ T⁻¹ W
+    Eigen::Matrix<Scalar, P, N> spreadRight = parameterSpread;
+    rightSolveLowerInPlace(triangle, spreadRight);  // ϑ T⁻¹
+    // G = X W C⁻¹ from Cᵀ Gᵀ = (X W)ᵀ.
+    Eigen::Matrix<Scalar, P, N> g = (jacobian * *sensitivity).transpose();
+    luSolveInPlace(c.transpose().partialPivLu(), g);
+    jacobian.noalias() += g.transpose() * spreadRight;
   }
 
   /// The Kalman gain of θ for the measurement update in progress (docs/algorithms.md §5.3): about the
