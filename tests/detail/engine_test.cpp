@@ -340,8 +340,9 @@ TEST(ParameterErrorCovariance, TheMapsByBlocksAreTheFullProducts) {
 
 // From n + p = 20 the dynamics' Jacobian A of points drawn from a lower factor, A (T − W ϑ) = change with
 // T = γL lower triangular, comes from substitutions with T and a p × p system (Woodbury's identity)
-// instead of the LU of T − W ϑ. The same A up to rounding: a backward-stable solve's relative error is
-// about n κ ε, κ the condition number of the matrix solved with.
+// instead of the LU of T − W ϑ. The same A up to rounding: the LU's relative error is about n κ ε, κ the
+// condition number of T − W ϑ; Woodbury's grows with κ(T) too (predict() takes the LU where T's
+// diagonal says κ(T) > 1/√ε), and T here is well conditioned (κ(T) about 5), so n κ ε bounds both.
 TEST(ParameterErrorCovariance, TheJacobianByTriangleSolvesTheSystemTheLuSolves) {
   constexpr int n = 17, p = 3;
   using Covariance = mjukf::detail::ParameterErrorCovariance<double, n, 5, p>;
@@ -368,18 +369,20 @@ TEST(ParameterErrorCovariance, TheJacobianByTriangleSolvesTheSystemTheLuSolves) 
 }
 
 // And predict() takes that path where the points' half differences are lower triangular: the same
-// prediction as the full products and the LU, to the solve's rounding.
+// prediction as the full products and the LU, to the solve's rounding, and not the same bits as the
+// same form given points an ulp off triangular, which take the LU.
 TEST(ParameterErrorCovariance, APredictionFromPointsOfALowerFactorIsTheLusToRounding) {
   constexpr int n = 17, m = 5, p = 3;
   using Blocks = mjukf::detail::ParameterErrorCovariance<double, n, m, p, true>;
   using Full = mjukf::detail::ParameterErrorCovariance<double, n, m, p, false>;
   using Matrix = Eigen::Matrix<double, n, n>;
   std::mt19937_64 rng(31);
-  Blocks blocks;
+  Blocks blocks, blocksByLu;
   Full full;
   const Matrix stateCovariance = mjukf::testing::randomCovariance<n>(rng);
   const Eigen::Matrix<double, p, p> parameterCovariance = mjukf::testing::randomCovariance<p>(rng);
   blocks.start(stateCovariance, parameterCovariance);
+  blocksByLu.start(stateCovariance, parameterCovariance);
   full.start(stateCovariance, parameterCovariance);
   const Eigen::Matrix<double, n, 1> mean = randomNormal<Eigen::Matrix<double, n, 1>>(rng);
   const Matrix factor = Matrix(Matrix::Identity() * 3 + 0.3 * randomNormal<Matrix>(rng)).triangularView<Eigen::Lower>();
@@ -404,8 +407,14 @@ TEST(ParameterErrorCovariance, APredictionFromPointsOfALowerFactorIsTheLusToRoun
     const Blocks::StateByParam* d = refreshed ? &derivative : nullptr;
     ASSERT_TRUE(blocks.predict(prior, propagated, parameterPoints, sensitivity, d, predicted, q, walk, 1.5));
     ASSERT_TRUE(full.predict(prior, propagated, parameterPoints, sensitivity, d, predicted, q, walk, 1.5));
+    Blocks::Points offTriangle = prior;
+    // χ₁'s first component one ulp up: the half differences' (0, 1) entry is then half an ulp of it.
+    offTriangle(0, 2) = std::nextafter(offTriangle(0, 2), 1e300);
+    ASSERT_TRUE(blocksByLu.predict(offTriangle, propagated, parameterPoints, sensitivity, d, predicted, q, walk, 1.5));
     blocks.commit();
+    blocksByLu.commit();
     full.commit();
+    EXPECT_FALSE(blocks.committed() == blocksByLu.committed()) << "the triangle's path was not taken";
     const Matrix spread = refreshed ? Matrix(factor - sensitivity * parameterSpread) : factor;
     const Eigen::JacobiSVD<Matrix> svd(spread);
     const double kappa = svd.singularValues()(0) / svd.singularValues()(n - 1);

@@ -6,6 +6,9 @@
 /// explain (W = ∂x̂/∂θ̂, parameter_sensitivity.hpp), carried through the filter's own steps: its gain
 /// K, its parameter gain G = diag(ξ) T, and the dynamics linearised from its sigma points.
 
+#include <cmath>
+#include <limits>
+
 #include <Eigen/Core>
 #include <Eigen/LU>
 
@@ -72,19 +75,22 @@ class ParameterErrorCovariance {
       parameterSpread_.col(j) = (parameterPoints.col(1 + j) - parameterPoints.col(1 + N + j)) * Scalar(0.5);
     }
     // Points drawn from a lower factor (every filter's) have half differences γL, lower triangular; from
-    // n + p = 20 A then needs no n × n LU (below, the code is the paper's plants' and the gallery's, to the
-    // bit).
+    // n + p = 20 (double; 28 in float) and p ≤ n/2, A then needs no n × n LU (below, the code is the paper's
+    // plants' and the gallery's, to the bit). Woodbury's form loses accuracy as γL nears singularity even
+    // where γL − W ϑ does not: such a γL, or a result that is not finite, takes the LU.
     bool byTriangle = false;
-    if constexpr (ByBlocks) byTriangle = isLowerTriangular(spread_);
+    if constexpr (ByBlocks && 2 * P <= N) byTriangle = isLowerTriangular(spread_) && wellConditionedDiagonal(spread_);
     if (derivative) {
       change_.noalias() -= *derivative * parameterSpread_;
-      if (!byTriangle) spread_.noalias() -= sensitivity * parameterSpread_;
     } else {
       change_.noalias() -= effect_ * parameterSpread_;
     }
     if (byTriangle) {
       jacobianByTriangle(change_, spread_, derivative ? &sensitivity : nullptr, parameterSpread_, jacobian_);
-    } else {  // A = change · spread⁻¹, i.e. spreadᵀ Aᵀ = changeᵀ
+      byTriangle = allFinite(jacobian_);
+    }
+    if (!byTriangle) {  // A = change · spread⁻¹, i.e. spreadᵀ Aᵀ = changeᵀ
+      if (derivative) spread_.noalias() -= sensitivity * parameterSpread_;
       StateMatrix transposed = change_.transpose();
       luSolveInPlace(spread_.transpose().partialPivLu(), transposed);
       jacobian_ = transposed.transpose();
@@ -125,11 +131,19 @@ class ParameterErrorCovariance {
     return found;
   }
 
+  /// Whether a triangular T's diagonal, which bounds its condition number from below, is within √ε of
+  /// its largest entry in size: otherwise Woodbury's form would lose what the LU keeps.
+  static bool wellConditionedDiagonal(const StateMatrix& triangle) {
+    const auto size = triangle.diagonal().cwiseAbs();
+    return size.minCoeff() >= std::sqrt(std::numeric_limits<Scalar>::epsilon()) * size.maxCoeff();
+  }
+
   /// A with A (T − W ϑ) = `change` for a lower-triangular T (`triangle`), W = `sensitivity` (null: W ϑ
   /// absent) and ϑ = `parameterSpread`, into `jacobian`: X = change T⁻¹ by substitution, and then by
   /// Woodbury's identity (T − W ϑ)⁻¹ = T⁻¹ + T⁻¹ W C⁻¹ ϑ T⁻¹ with C = I − ϑ T⁻¹ W (p × p),
   /// A = X + (X W) C⁻¹ (ϑ T⁻¹): about n³/2 multiply-adds and O(n² p), where the LU of T − W ϑ and its
-  /// solve for n right-hand sides take 4n³/3. Not finite when T or C is singular.
+  /// solve for n right-hand sides take 4n³/3. Not finite when T or C is singular (predict() then takes
+  /// the LU of T − W ϑ, which may be regular).
   static void jacobianByTriangle(const StateMatrix& change, const StateMatrix& triangle,
                                  const StateByParam* sensitivity, const Eigen::Matrix<Scalar, P, N>& parameterSpread,
                                  StateMatrix& jacobian) {
