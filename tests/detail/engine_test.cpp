@@ -338,6 +338,18 @@ TEST(ParameterErrorCovariance, TheMapsByBlocksAreTheFullProducts) {
   expectSame("predict");
 }
 
+// A lower-triangular n × n matrix near 3 I (condition number about 5), and a matrix's condition number.
+template <int N>
+Eigen::Matrix<double, N, N> wellConditionedLower(std::mt19937_64& rng) {
+  using Matrix = Eigen::Matrix<double, N, N>;
+  return Matrix(Matrix::Identity() * 3 + 0.3 * randomNormal<Matrix>(rng)).template triangularView<Eigen::Lower>();
+}
+template <class Matrix>
+double conditionNumber(const Matrix& m) {
+  const Eigen::JacobiSVD<Matrix> svd(m);
+  return svd.singularValues()(0) / svd.singularValues()(svd.singularValues().size() - 1);
+}
+
 // From n + p = 20 the dynamics' Jacobian A of points drawn from a lower factor, A (T − W ϑ) = change with
 // T = γL lower triangular, comes from substitutions with T and a p × p system (Woodbury's identity)
 // instead of the LU of T − W ϑ. The same A up to rounding: the LU's relative error is about n κ ε, κ the
@@ -349,8 +361,7 @@ TEST(ParameterErrorCovariance, TheJacobianByTriangleSolvesTheSystemTheLuSolves) 
   using Matrix = Eigen::Matrix<double, n, n>;
   std::mt19937_64 rng(29);
   for (int trial = 0; trial < 20; ++trial) {
-    const Matrix triangle =
-        Matrix(Matrix::Identity() * 3 + 0.3 * randomNormal<Matrix>(rng)).triangularView<Eigen::Lower>();
+    const Matrix triangle = wellConditionedLower<n>(rng);
     const auto change = randomNormal<Matrix>(rng);
     const auto sensitivity = randomNormal<Eigen::Matrix<double, n, p>>(rng);
     const auto parameterSpread = randomNormal<Eigen::Matrix<double, p, n>>(rng);
@@ -360,8 +371,7 @@ TEST(ParameterErrorCovariance, TheJacobianByTriangleSolvesTheSystemTheLuSolves) 
       Matrix jacobian;
       Covariance::jacobianByTriangle(change, triangle, withSensitivity ? &sensitivity : nullptr, parameterSpread,
                                      jacobian);
-      const Eigen::JacobiSVD<Matrix> svd(spread);
-      const double kappa = svd.singularValues()(0) / svd.singularValues()(n - 1);
+      const double kappa = conditionNumber(spread);
       EXPECT_LT((jacobian - expected).norm(), 4 * n * kappa * std::numeric_limits<double>::epsilon() * expected.norm())
           << "trial " << trial << (withSensitivity ? ", with W ϑ" : "") << ", κ " << kappa;
     }
@@ -385,7 +395,7 @@ TEST(ParameterErrorCovariance, APredictionFromPointsOfALowerFactorIsTheLusToRoun
   blocksByLu.start(stateCovariance, parameterCovariance);
   full.start(stateCovariance, parameterCovariance);
   const Eigen::Matrix<double, n, 1> mean = randomNormal<Eigen::Matrix<double, n, 1>>(rng);
-  const Matrix factor = Matrix(Matrix::Identity() * 3 + 0.3 * randomNormal<Matrix>(rng)).triangularView<Eigen::Lower>();
+  const Matrix factor = wellConditionedLower<n>(rng);
   Blocks::Points prior;
   prior.col(0) = mean;
   for (int j = 0; j < n; ++j) {
@@ -416,8 +426,7 @@ TEST(ParameterErrorCovariance, APredictionFromPointsOfALowerFactorIsTheLusToRoun
     full.commit();
     EXPECT_FALSE(blocks.committed() == blocksByLu.committed()) << "the triangle's path was not taken";
     const Matrix spread = refreshed ? Matrix(factor - sensitivity * parameterSpread) : factor;
-    const Eigen::JacobiSVD<Matrix> svd(spread);
-    const double kappa = svd.singularValues()(0) / svd.singularValues()(n - 1);
+    const double kappa = conditionNumber(spread);
     // A's relative error is n κ ε; it enters the prediction three times (A J Aᵀ and B = D − A W). The
     // factor 8 is a margin for the norms of the products' terms against the result's.
     const auto& expected = full.committed();

@@ -73,7 +73,7 @@ struct SignalInput {
 };
 
 // The model's own input signal u(t) for a time update, which propagates all its sigma points over the
-// same stage times: the last few distinct times and their values are kept, so u(t) is evaluated once
+// same stage times: the first few distinct times and their values are kept, so u(t) is evaluated once
 // per stage time rather than once per point and stage (the values are the same, since input(t) is a
 // function of t alone; see model.hpp). Lives for one call; no allocation.
 template <class Model>
