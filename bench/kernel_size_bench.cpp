@@ -1,16 +1,19 @@
 // kernel/<kernel>/<form>/<scalar>/<L>: each kernel of detail/linear_algebra.hpp that is chosen by size,
 // in each of its forms, on an L-dimensional point set of 2L + 1 points (a filter of augmented dimension
 // L): the threshold `generalKernelsFrom` is the smallest L from which the general form is faster.
-//   covariance: P = Σ Wᵢ dᵢ dᵢᵀ (L × L) — coefficientwise, triangle (one triangle, mirrored), gemm (both
-//     triangles: the general product as Eigen picks it);
+//   covariance: P = Σ Wᵢ dᵢ dᵢᵀ (L × L) — coefficientwise, triangle (Eigen's product into one triangle,
+//     mirrored: the one-triangle form until `columns`), gemm (both triangles: the general product as Eigen
+//     picks it), columns (one triangle by a matrix-vector product per column, mirrored);
 //   cross: P_xy = Σ Wᵢ dᵢ eᵢᵀ (L × ⌈L/2⌉, the chain's m = n/2) — coefficientwise, product;
 //   subtract: P − U Uᵀ (U L × ⌈L/2⌉) — coefficientwise, rank_update (one triangle, mirrored), gemm;
-//   cholesky: S Sᵀ = P — unrolled, blocked (Eigen's in-place LLT).
+//   cholesky: S Sᵀ = P — unrolled, blocked (Eigen's in-place LLT: the general form until `columns`),
+//     columns (a matrix-vector product per column).
 // scripts/scaling.sh runs it and writes the table of docs/performance-scaling.md.
 
 #include <random>
 #include <string>
 
+#include <Eigen/Cholesky>
 #include <benchmark/benchmark.h>
 
 #include "mjukf/detail/linear_algebra.hpp"
@@ -58,10 +61,12 @@ void covariance(benchmark::State& state) {
     benchmark::DoNotOptimize(in.d.data());
     if constexpr (Form == 0)
       la::weightedCovarianceLowerCoefficientwise(in.d, in.w, in.p);
-    else if constexpr (Form == 1)
-      la::weightedCovarianceLowerTriangle(in.d, in.w, in.p);
-    else
+    else if constexpr (Form == 1)  // the one-triangle form until the one by columns: Eigen's triangular product
+      in.p.template triangularView<Eigen::Lower>() = (in.d * in.w.asDiagonal()) * in.d.transpose();
+    else if constexpr (Form == 2)
       la::weightedOuterSumProduct(in.d, in.d, in.w, in.p);
+    else
+      la::weightedCovarianceLowerByColumns(in.d, in.w, in.p);
     la::mirrorLowerTriangle(in.p);
     benchmark::DoNotOptimize(in.p.data());
     benchmark::ClobberMemory();
@@ -105,7 +110,15 @@ void cholesky(benchmark::State& state) {
   KernelInputs<Scalar, L> in;
   for (auto _ : state) {
     benchmark::DoNotOptimize(in.p.data());
-    const bool ok = Form == 0 ? la::choleskyLowerUnrolled(in.p, in.factor) : la::choleskyLowerBlocked(in.p, in.factor);
+    bool ok;
+    if constexpr (Form == 0) {
+      ok = la::choleskyLowerUnrolled(in.p, in.factor);
+    } else if constexpr (Form == 1) {  // the general form until the one by columns: Eigen's blocked in-place LLT
+      in.factor.template triangularView<Eigen::Lower>() = in.p;
+      ok = Eigen::internal::llt_inplace<Scalar, Eigen::Lower>::blocked(in.factor) < 0;
+    } else {
+      ok = la::choleskyLowerByColumns(in.p, in.factor);
+    }
     if (!ok) {
       state.SkipWithError("not positive definite");
       break;
@@ -122,6 +135,7 @@ void registerSize() {
   benchmark::RegisterBenchmark(("kernel/covariance/coefficientwise" + suffix).c_str(), covariance<Scalar, L, 0>);
   benchmark::RegisterBenchmark(("kernel/covariance/triangle" + suffix).c_str(), covariance<Scalar, L, 1>);
   benchmark::RegisterBenchmark(("kernel/covariance/gemm" + suffix).c_str(), covariance<Scalar, L, 2>);
+  benchmark::RegisterBenchmark(("kernel/covariance/columns" + suffix).c_str(), covariance<Scalar, L, 3>);
   benchmark::RegisterBenchmark(("kernel/cross/coefficientwise" + suffix).c_str(), cross<Scalar, L, 0>);
   benchmark::RegisterBenchmark(("kernel/cross/product" + suffix).c_str(), cross<Scalar, L, 1>);
   benchmark::RegisterBenchmark(("kernel/subtract/coefficientwise" + suffix).c_str(), subtract<Scalar, L, 0>);
@@ -129,6 +143,7 @@ void registerSize() {
   benchmark::RegisterBenchmark(("kernel/subtract/gemm" + suffix).c_str(), subtract<Scalar, L, 2>);
   benchmark::RegisterBenchmark(("kernel/cholesky/unrolled" + suffix).c_str(), cholesky<Scalar, L, 0>);
   benchmark::RegisterBenchmark(("kernel/cholesky/blocked" + suffix).c_str(), cholesky<Scalar, L, 1>);
+  benchmark::RegisterBenchmark(("kernel/cholesky/columns" + suffix).c_str(), cholesky<Scalar, L, 2>);
 }
 
 template <class Scalar, int... L>

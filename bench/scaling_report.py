@@ -81,8 +81,9 @@ def exponent(rows, key, p, field):
 
 def kernel_table(kernels, scalar):
     forms = [("covariance", "coefficientwise"), ("covariance", "gemm"), ("covariance", "triangle"),
-             ("cross", "coefficientwise"), ("cross", "product"), ("subtract", "coefficientwise"),
-             ("subtract", "rank_update"), ("subtract", "gemm"), ("cholesky", "unrolled"), ("cholesky", "blocked")]
+             ("covariance", "columns"), ("cross", "coefficientwise"), ("cross", "product"),
+             ("subtract", "coefficientwise"), ("subtract", "rank_update"), ("subtract", "gemm"),
+             ("cholesky", "unrolled"), ("cholesky", "blocked"), ("cholesky", "columns")]
     sizes = sorted({int(m.group(1)) for name in kernels
                     for m in [re.match(rf"kernel/\w+/\w+/{scalar}/(\d+)$", name)] if m})
     lines = ["| L | " + " | ".join(f"{k} {f}" for k, f in forms) + " |", "|---" * (len(forms) + 1) + "|"]
@@ -194,28 +195,32 @@ def main():
         w("(median of 5, the fastest form of each kernel in bold). covariance: Σ Wᵢ dᵢ dᵢᵀ (L × L);")
         w("cross: Σ Wᵢ dᵢ eᵢᵀ (L × ⌈L/2⌉); subtract: P − U Uᵀ (U L × ⌈L/2⌉); cholesky: the factor of an")
         w("L × L P. Forms: coefficientwise/unrolled (written out, as before), gemm (Eigen's general")
-        w("product, both triangles), triangle (the product into the lower triangle, mirrored), product")
-        w("(GEMM), rank_update (`selfadjointView<Lower>().rankUpdate`, mirrored), blocked (Eigen's")
-        w("in-place LLT).\n")
+        w("product, both triangles), triangle (Eigen's product into the lower triangle, mirrored), columns")
+        w("(the lower triangle by a matrix-vector product per column, mirrored; for the Cholesky factor,")
+        w("left-looking), product (GEMM), rank_update (`selfadjointView<Lower>().rankUpdate`, mirrored),")
+        w("blocked (Eigen's in-place LLT). A form a run did not have shows as –.\n")
         w("Thresholds chosen (`generalKernelsFrom` in `detail/linear_algebra.hpp`). They were read, while")
         w("the run was going, off the wall-clock medians of its text output; the CPU-time medians of the")
         w("tables below (the figure this page uses everywhere) put four of them one or two sizes")
         w("elsewhere, at sizes where the forms differ by 1–20 %: they are left as chosen, the CPU-time")
-        w("border in the last column, for the next change of this header to settle.\n")
+        w("border in the last column, for the next change of this header to settle. They were chosen with")
+        w("the one-triangle covariance by Eigen's triangular product and the Cholesky factor by Eigen's")
+        w("blocked LLT; the forms by columns that replaced both took fewer instructions and less time at")
+        w("every size from the thresholds on (CHANGELOG), and the thresholds were not measured again.\n")
         w("| kernel | double | float | CPU-time border (double; float) |")
         w("|---|---|---|---|")
         w("| covariance: GEMM from | 9 | 9 | 8; 9 |")
         w("| covariance: one triangle from | 20 | 28 | 20; 32 (28: 1 % slower than GEMM) |")
         w("| cross-covariance: GEMM from | 11 | 14 | 9; 13 |")
         w("| P − U Uᵀ: rank-k update from | 20 | 24 | 20; 24 (GEMM, both triangles, 0–13 % faster) |")
-        w("| Cholesky: blocked LLT from | 20 (see below) | 24 | 36; 24 |")
+        w("| Cholesky: by columns (blocked LLT until then) from | 20 (see below) | 24 | 36; 24 |")
         w("")
         w("The one deliberate exception is the double Cholesky: the unrolled factor stayed up to 10 %")
-        w("faster than Eigen's up to L = 32 (36: blocked faster), but its straight-line code and compile")
-        w("time grow as L³ (the micro-benchmark, with both forms at every size, took about 20 minutes to")
-        w("compile on the shared machine), and the factorisation is a small part of a step at these sizes;")
-        w("it is blocked from L = 20. P − U Uᵀ keeps the rank-k update (one triangle, mirrored: exactly")
-        w("symmetric) for both types, although GEMM was a little faster in float.\n")
+        w("faster than Eigen's blocked LLT up to L = 32 (36: blocked faster), but its straight-line code")
+        w("and compile time grow as L³ (the micro-benchmark, with both forms at every size, took about 20")
+        w("minutes to compile on the shared machine), and the factorisation is a small part of a step at")
+        w("these sizes; it is general from L = 20. P − U Uᵀ keeps the rank-k update (one triangle,")
+        w("mirrored: exactly symmetric) for both types, although GEMM was a little faster in float.\n")
         for scalar in ("double", "float"):
             w(f"### {scalar} (ns per call)\n")
             w(kernel_table(kernels, scalar))

@@ -1,7 +1,7 @@
 // The kernels of detail/linear_algebra.hpp that are chosen by size: each general (large-size) form
 // against the written-out form it replaces, on random inputs at sizes on both sides of its threshold,
 // to tolerances derived from the rounding of the two computations (below); the dispatcher at each size
-// equals the form its threshold names; and the blocked Cholesky refuses what the unrolled one refuses.
+// equals the form its threshold names; and the Cholesky by columns refuses what the unrolled one refuses.
 //
 // Tolerances. Both forms compute the same sums of the same products in another order. A sum of K
 // products computed in any order has an error of at most γ_K Σ|termₖ| (γ_K = K ε / (1 − K ε), Higham,
@@ -68,23 +68,23 @@ void expectOuterSumsAgree(std::mt19937_64& rng) {
   const auto d = randomMatrix<Scalar, L, Count>(rng);
   const auto e = randomMatrix<Scalar, M, Count>(rng);
   const auto w = weights<Scalar, Count>();
-  Eigen::Matrix<Scalar, L, L> old, lower, gemm, triangle, chosen;
+  Eigen::Matrix<Scalar, L, L> old, lower, gemm, byColumns, chosen;
   la::weightedOuterSumCoefficientwise(d, d, w, old);
   la::weightedCovarianceLowerCoefficientwise(d, w, lower);
   la::mirrorLowerTriangle(lower);
   la::weightedOuterSumProduct(d, d, w, gemm);
   la::mirrorLowerTriangle(gemm);
-  la::weightedCovarianceLowerTriangle(d, w, triangle);
-  la::mirrorLowerTriangle(triangle);
+  la::weightedCovarianceLowerByColumns(d, w, byColumns);
+  la::mirrorLowerTriangle(byColumns);
   la::weightedCovariance(d, w, chosen);
   const Eigen::Matrix<double, L, L> bound =
       2 * 2 * gamma<Scalar>(Count + 2) *
       (d.cwiseAbs() * w.cwiseAbs().asDiagonal() * d.cwiseAbs().transpose()).template cast<double>();
   EXPECT_TRUE(((gemm - old).template cast<double>().cwiseAbs().array() <= bound.array()).all()) << "L = " << L;
-  EXPECT_TRUE(((triangle - old).template cast<double>().cwiseAbs().array() <= bound.array()).all()) << "L = " << L;
+  EXPECT_TRUE(((byColumns - old).template cast<double>().cwiseAbs().array() <= bound.array()).all()) << "L = " << L;
   EXPECT_TRUE(((lower - old).template cast<double>().cwiseAbs().array() <= bound.array()).all()) << "L = " << L;
   const auto sizes = la::generalKernelsFrom<Scalar>;
-  const auto& expected = L >= sizes.covarianceTriangle ? triangle : (L >= sizes.covarianceProduct ? gemm : lower);
+  const auto& expected = L >= sizes.covarianceTriangle ? byColumns : (L >= sizes.covarianceProduct ? gemm : lower);
   EXPECT_EQ(chosen, expected) << "L = " << L;
   EXPECT_EQ(chosen, chosen.transpose()) << "L = " << L;  // mirrored: exactly symmetric
 
@@ -120,7 +120,7 @@ void expectSubtractionsAgree(std::mt19937_64& rng) {
 template <class Scalar, int N>
 void expectFactorsAgree(std::mt19937_64& rng) {
   const Eigen::Matrix<Scalar, N, N> a = randomSpd<Scalar, N>(rng);
-  Eigen::Matrix<Scalar, N, N> unrolled, blocked, chosen;
+  Eigen::Matrix<Scalar, N, N> unrolled, byColumns, chosen;
   // The unrolled factor's code and compile time grow as N³: from the threshold on, where the library no
   // longer instantiates it, the reference is Eigen's LLT (backward stable as well: the same bound).
   if constexpr (N < la::generalKernelsFrom<Scalar>.cholesky) {
@@ -128,19 +128,19 @@ void expectFactorsAgree(std::mt19937_64& rng) {
   } else {
     unrolled = a.llt().matrixL();
   }
-  ASSERT_TRUE(la::choleskyLowerBlocked(a, blocked));
+  ASSERT_TRUE(la::choleskyLowerByColumns(a, byColumns));
   ASSERT_TRUE(la::choleskyLower(a, chosen));
   const Eigen::Matrix<double, N, N> ad = a.template cast<double>();
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> eigen(ad);
   const double kappa = eigen.eigenvalues().maxCoeff() / eigen.eigenvalues().minCoeff();
   const double normS = std::sqrt(eigen.eigenvalues().maxCoeff());  // ‖S‖₂ = ‖A‖₂^½
   const double bound = 2 * std::sqrt(2.0) * kappa * N * gamma<Scalar>(N + 1) * normS;
-  EXPECT_LE((blocked - unrolled).template cast<double>().norm(), bound) << "N = " << N << ", κ = " << kappa;
-  EXPECT_TRUE((blocked.template triangularView<Eigen::StrictlyUpper>().toDenseMatrix().array() == 0).all());
-  EXPECT_EQ(chosen, N >= la::generalKernelsFrom<Scalar>.cholesky ? blocked : unrolled) << "N = " << N;
+  EXPECT_LE((byColumns - unrolled).template cast<double>().norm(), bound) << "N = " << N << ", κ = " << kappa;
+  EXPECT_TRUE((byColumns.template triangularView<Eigen::StrictlyUpper>().toDenseMatrix().array() == 0).all());
+  EXPECT_EQ(chosen, N >= la::generalKernelsFrom<Scalar>.cholesky ? byColumns : unrolled) << "N = " << N;
 }
 
-// What the unrolled factor refuses, the blocked one refuses: rank one (pivots of rounding), indefinite,
+// What the unrolled factor refuses, the one by columns refuses: rank one (pivots of rounding), indefinite,
 // NaN below the diagonal, Inf on it.
 template <class Scalar, int N>
 void expectSameRefusals() {
@@ -157,14 +157,14 @@ void expectSameRefusals() {
     if constexpr (N < la::generalKernelsFrom<Scalar>.cholesky) {
       EXPECT_FALSE(la::choleskyLowerUnrolled(*m, s));
     }
-    EXPECT_FALSE(la::choleskyLowerBlocked(*m, s));
+    EXPECT_FALSE(la::choleskyLowerByColumns(*m, s));
   }
   // Just above and below the margin N ε a_jj on the last pivot: the same verdict from both.
   for (const double factor : {0.5, 4.0}) {
     Matrix nearSingular = Matrix::Identity();
     nearSingular(N - 1, N - 1) = Scalar(1 + factor * N * std::numeric_limits<Scalar>::epsilon());
     nearSingular(N - 1, 0) = nearSingular(0, N - 1) = Scalar(1);
-    EXPECT_EQ(la::choleskyLowerBlocked(nearSingular, s), factor > 1) << factor;
+    EXPECT_EQ(la::choleskyLowerByColumns(nearSingular, s), factor > 1) << factor;
     if constexpr (N < la::generalKernelsFrom<Scalar>.cholesky) {
       EXPECT_EQ(la::choleskyLowerUnrolled(nearSingular, s), factor > 1) << factor;
     }
@@ -200,7 +200,7 @@ TEST(LinearAlgebraBySize, GeneralFormsAgreeWithTheWrittenOutOnesFloat) {
   expectAllAgree<float, 36>(rng);
 }
 
-TEST(LinearAlgebraBySize, BlockedCholeskyRefusesWhatTheUnrolledOneRefuses) {
+TEST(LinearAlgebraBySize, CholeskyByColumnsRefusesWhatTheUnrolledOneRefuses) {
   expectSameRefusals<double, 4>();
   expectSameRefusals<double, 11>();
   expectSameRefusals<double, 36>();

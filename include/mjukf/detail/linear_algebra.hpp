@@ -27,21 +27,22 @@ namespace mjukf::detail {
 // The weighted outer sums, P − U Uᵀ and the Cholesky factor below are written out coefficient by
 // coefficient (fully unrolled for the factor), which is fastest at the sizes of the paper's plants but
 // grows as L³ and stops using the vector units well: at L = 36 the outer sums were half of a step. From
-// a size on, each takes Eigen's general form instead: a matrix product (GEMM; for a covariance, from a
-// larger size, one triangle of it), a symmetric rank-k update of one triangle, the blocked LLT. The
-// sizes are where the general form measured faster and stayed so (`mjukf_kernel_bench`, each kernel in
-// each form at L = 2 … 16, 20, 24, 28, 32, 36; docs/performance-scaling.md says which are a size or two
-// off the CPU-time border), per scalar type, with one exception: the double Cholesky, whose unrolled
-// form stays up to 10 % faster up to L = 32 but whose code and compile time grow as L³, is blocked from
-// 20. The choice is made at compile time on
-// the fixed size L (for a point set, of its 2L + 1 or 2L points). MJUKF_GENERAL_KERNELS_FROM overrides
-// them all (scripts/scaling.sh builds the small-size kernels at every size with it).
+// a size on, each takes a general form instead: a matrix product (GEMM; for a covariance, from a larger
+// size, one triangle of it), a symmetric rank-k update of one triangle, a factorisation by columns (one
+// of Eigen's matrix-vector products each). The sizes are where the general form measured faster and
+// stayed so (`mjukf_kernel_bench`, each kernel in each form at L = 2 … 16, 20, 24, 28, 32, 36;
+// docs/performance-scaling.md says which are a size or two off the CPU-time border), per scalar type,
+// with one exception: the double Cholesky, whose unrolled form stayed up to 10 % faster than Eigen's
+// blocked LLT (the general form then) up to L = 32 but whose code and compile time grow as L³, is
+// general from 20. The choice is made at compile time on the fixed size L (for a point set, of its
+// 2L + 1 or 2L points). MJUKF_GENERAL_KERNELS_FROM overrides them all (scripts/scaling.sh builds the
+// small-size kernels at every size with it).
 struct GeneralKernelSizes {
   int covarianceProduct;   // Σ Wᵢ dᵢ dᵢᵀ by GEMM, both triangles
-  int covarianceTriangle;  // … by a product of the lower triangle only, mirrored
+  int covarianceTriangle;  // … by the lower triangle only, a matrix-vector product per column, mirrored
   int crossProduct;        // Σ Wᵢ aᵢ bᵢᵀ by GEMM
   int subtractRankUpdate;  // P − U Uᵀ by a rank-k update of the lower triangle, mirrored
-  int cholesky;            // Eigen's blocked LLT
+  int cholesky;            // the factor by columns (choleskyLowerByColumns)
 };
 #ifdef MJUKF_GENERAL_KERNELS_FROM
 template <class Scalar>
@@ -149,29 +150,35 @@ bool choleskyLowerUnrolled(const Eigen::Matrix<Scalar, N, N>& a, Eigen::Matrix<S
   return true;
 }
 
-// The same factor and the same refusals by Eigen's blocked in-place LLT (the routine Eigen::LLT runs,
-// without its L1 norm), for large N. It stops at the first pivot ≤ 0 or NaN; the margin is checked on
-// the factor afterwards: dⱼ = s_jj² is the pivot (up to one rounding), and a NaN or Inf anywhere in the
-// lower triangle of A reaches a later pivot through the column it enters, so it fails here too.
+// The same factor and the same refusals, column by column (left-looking), for large N: column j is
+// a_j − S_{j:,0:j} S_{j,0:j}ᵀ, one matrix-vector product, then scaled by the root of its pivot. The
+// pivot is checked as in the unrolled form before its root is taken, so it stops at the first one not
+// above the margin, and a NaN or Inf in the lower triangle of A reaches a later pivot through the column
+// it enters. At L = 20 … 64 it took 3–36 % fewer instructions than Eigen's blocked in-place LLT, the form
+// before, whose blocks of 8 are too small at these sizes to pay for its level-3 kernels (L = 36, double:
+// about 35,000 against 55,000, and a third less time).
 template <class Scalar, int N>
-bool choleskyLowerBlocked(const Eigen::Matrix<Scalar, N, N>& a, Eigen::Matrix<Scalar, N, N>& s) {
+bool choleskyLowerByColumns(const Eigen::Matrix<Scalar, N, N>& a, Eigen::Matrix<Scalar, N, N>& s) {
   constexpr Scalar margin = Scalar(N) * std::numeric_limits<Scalar>::epsilon();
   s.template triangularView<Eigen::Lower>() = a;
-  if (Eigen::internal::llt_inplace<Scalar, Eigen::Lower>::blocked(s) >= 0) return false;
   for (int j = 0; j < N; ++j) {
-    const Scalar pivot = s(j, j) * s(j, j);
+    if (j > 0) s.col(j).tail(N - j).noalias() -= s.block(j, 0, N - j, j) * s.row(j).head(j).transpose();
+    const Scalar pivot = s(j, j);
     if (!(pivot > margin * a(j, j)) || !(pivot <= std::numeric_limits<Scalar>::max())) return false;  // NaN fails too
+    const Scalar root = std::sqrt(pivot);
+    s(j, j) = root;
+    s.col(j).tail(N - j - 1) /= root;
   }
   s.template triangularView<Eigen::StrictlyUpper>().setZero();
   return true;
 }
 
-// S with A = S Sᵀ (choleskyLowerUnrolled's contract): the unrolled form for small N, the blocked one
+// S with A = S Sᵀ (choleskyLowerUnrolled's contract): the unrolled form for small N, the one by columns
 // from generalKernelsFrom<Scalar>.cholesky on.
 template <class Scalar, int N>
 bool choleskyLower(const Eigen::Matrix<Scalar, N, N>& a, Eigen::Matrix<Scalar, N, N>& s) {
   if constexpr (atLeast<N>(generalKernelsFrom<Scalar>.cholesky))
-    return choleskyLowerBlocked(a, s);
+    return choleskyLowerByColumns(a, s);
   else
     return choleskyLowerUnrolled(a, s);
 }
@@ -296,7 +303,9 @@ void forEachLowerColumn(F&& f) {
 //    (weightedOuterSumCoefficientwise) up to the order of its sums, which Eigen's vectorisation chooses
 //    (that full sum is not exactly symmetric either: (Wₖ aᵢₖ) aⱼₖ and (Wₖ aⱼₖ) aᵢₖ round apart);
 //  - from covarianceProduct, GEMM (both triangles: its packing costs more than the half it could skip);
-//  - from covarianceTriangle, a product of the lower triangle only.
+//  - from covarianceTriangle, the lower triangle only, one matrix-vector product per column. At L = 36
+//    it took 7 % (double) and 10 % (float) fewer instructions than Eigen's product into the lower
+//    triangle, the form before (which packs both operands as for a GEMM), and 14–24 % less time.
 template <class Dev, class Weights, class Out>
 void weightedCovarianceLowerCoefficientwise(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase<Weights>& weights,
                                             Eigen::MatrixBase<Out>& out) {
@@ -307,16 +316,22 @@ void weightedCovarianceLowerCoefficientwise(const Eigen::MatrixBase<Dev>& d, con
   });
 }
 template <class Dev, class Weights, class Out>
-void weightedCovarianceLowerTriangle(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase<Weights>& weights,
-                                     Eigen::MatrixBase<Out>& out) {
-  out.template triangularView<Eigen::Lower>() = (d * weights.asDiagonal()) * d.transpose();
+void weightedCovarianceLowerByColumns(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase<Weights>& weights,
+                                      Eigen::MatrixBase<Out>& out) {
+  constexpr int N = Dev::RowsAtCompileTime;
+  // The weighted deviations stored by point, so that each coefficient is a dot product over the points
+  // of two contiguous columns.
+  const Eigen::Matrix<typename Out::Scalar, Dev::ColsAtCompileTime, N> weighted =
+      (d * weights.asDiagonal()).transpose();
+  for (int c = 0; c < N; ++c)
+    out.col(c).tail(N - c).noalias() = weighted.rightCols(N - c).transpose() * d.row(c).transpose();
 }
 template <class Dev, class Weights, class Out>
 void weightedCovarianceLower(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase<Weights>& weights,
                              Eigen::MatrixBase<Out>& out) {
   constexpr int L = Dev::ColsAtCompileTime / 2;
   if constexpr (atLeast<L>(generalKernelsFrom<typename Out::Scalar>.covarianceTriangle))
-    weightedCovarianceLowerTriangle(d, weights, out);
+    weightedCovarianceLowerByColumns(d, weights, out);
   else if constexpr (atLeast<L>(generalKernelsFrom<typename Out::Scalar>.covarianceProduct))
     weightedOuterSumProduct(d, d, weights, out);
   else
