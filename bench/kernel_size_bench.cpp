@@ -1,9 +1,8 @@
 // kernel/<kernel>/<form>/<scalar>/<L>: each kernel of detail/linear_algebra.hpp that is chosen by size,
 // in each of its forms, on an L-dimensional point set of 2L + 1 points (a filter of augmented dimension
 // L): the threshold `generalKernelsFrom` is the smallest L from which the general form is faster.
-//   covariance: P = Σ Wᵢ dᵢ dᵢᵀ (L × L) — coefficientwise, triangle (Eigen's product into one triangle,
-//     mirrored: the one-triangle form until `columns`), gemm (both triangles: the general product as Eigen
-//     picks it), columns (one triangle by a matrix-vector product per column, mirrored);
+//   covariance: P = Σ Wᵢ dᵢ dᵢᵀ (L × L) — coefficientwise, triangle (one triangle, mirrored), gemm (both
+//     triangles: the general product as Eigen picks it);
 //   cross: P_xy = Σ Wᵢ dᵢ eᵢᵀ (L × ⌈L/2⌉, the chain's m = n/2) — coefficientwise, product;
 //   subtract: P − U Uᵀ (U L × ⌈L/2⌉) — coefficientwise, rank_update (one triangle, mirrored), gemm;
 //   cholesky: S Sᵀ = P — unrolled, blocked (Eigen's in-place LLT: the general form until `columns`),
@@ -61,12 +60,10 @@ void covariance(benchmark::State& state) {
     benchmark::DoNotOptimize(in.d.data());
     if constexpr (Form == 0)
       la::weightedCovarianceLowerCoefficientwise(in.d, in.w, in.p);
-    else if constexpr (Form == 1)  // the one-triangle form until the one by columns: Eigen's triangular product
-      in.p.template triangularView<Eigen::Lower>() = (in.d * in.w.asDiagonal()) * in.d.transpose();
-    else if constexpr (Form == 2)
-      la::weightedOuterSumProduct(in.d, in.d, in.w, in.p);
+    else if constexpr (Form == 1)
+      la::weightedCovarianceLowerTriangle(in.d, in.w, in.p);
     else
-      la::weightedCovarianceLowerByColumns(in.d, in.w, in.p);
+      la::weightedOuterSumProduct(in.d, in.d, in.w, in.p);
     la::mirrorLowerTriangle(in.p);
     benchmark::DoNotOptimize(in.p.data());
     benchmark::ClobberMemory();
@@ -135,7 +132,6 @@ void registerSize() {
   benchmark::RegisterBenchmark(("kernel/covariance/coefficientwise" + suffix).c_str(), covariance<Scalar, L, 0>);
   benchmark::RegisterBenchmark(("kernel/covariance/triangle" + suffix).c_str(), covariance<Scalar, L, 1>);
   benchmark::RegisterBenchmark(("kernel/covariance/gemm" + suffix).c_str(), covariance<Scalar, L, 2>);
-  benchmark::RegisterBenchmark(("kernel/covariance/columns" + suffix).c_str(), covariance<Scalar, L, 3>);
   benchmark::RegisterBenchmark(("kernel/cross/coefficientwise" + suffix).c_str(), cross<Scalar, L, 0>);
   benchmark::RegisterBenchmark(("kernel/cross/product" + suffix).c_str(), cross<Scalar, L, 1>);
   benchmark::RegisterBenchmark(("kernel/subtract/coefficientwise" + suffix).c_str(), subtract<Scalar, L, 0>);

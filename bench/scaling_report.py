@@ -81,7 +81,7 @@ def exponent(rows, key, p, field):
 
 def kernel_table(kernels, scalar):
     forms = [("covariance", "coefficientwise"), ("covariance", "gemm"), ("covariance", "triangle"),
-             ("covariance", "columns"), ("cross", "coefficientwise"), ("cross", "product"),
+             ("cross", "coefficientwise"), ("cross", "product"),
              ("subtract", "coefficientwise"), ("subtract", "rank_update"), ("subtract", "gemm"),
              ("cholesky", "unrolled"), ("cholesky", "blocked"), ("cholesky", "columns")]
     sizes = sorted({int(m.group(1)) for name in kernels
@@ -195,18 +195,17 @@ def main():
         w("(median of 5, the fastest form of each kernel in bold). covariance: Σ Wᵢ dᵢ dᵢᵀ (L × L);")
         w("cross: Σ Wᵢ dᵢ eᵢᵀ (L × ⌈L/2⌉); subtract: P − U Uᵀ (U L × ⌈L/2⌉); cholesky: the factor of an")
         w("L × L P. Forms: coefficientwise/unrolled (written out, as before), gemm (Eigen's general")
-        w("product, both triangles), triangle (Eigen's product into the lower triangle, mirrored), columns")
-        w("(the lower triangle by a matrix-vector product per column, mirrored; for the Cholesky factor,")
-        w("left-looking), product (GEMM), rank_update (`selfadjointView<Lower>().rankUpdate`, mirrored),")
-        w("blocked (Eigen's in-place LLT). A form a run did not have shows as –.\n")
+        w("product, both triangles), triangle (the product into the lower triangle, mirrored), product")
+        w("(GEMM), rank_update (`selfadjointView<Lower>().rankUpdate`, mirrored), blocked (Eigen's")
+        w("in-place LLT, the Cholesky's general form until `columns`), columns (left-looking, a")
+        w("matrix-vector product per column). A form a run did not have shows as –.\n")
         w("Thresholds chosen (`generalKernelsFrom` in `detail/linear_algebra.hpp`). They were read, while")
         w("the run was going, off the wall-clock medians of its text output; the CPU-time medians of the")
         w("tables below (the figure this page uses everywhere) put four of them one or two sizes")
         w("elsewhere, at sizes where the forms differ by 1–20 %: they are left as chosen, the CPU-time")
-        w("border in the last column, for the next change of this header to settle. They were chosen with")
-        w("the one-triangle covariance by Eigen's triangular product and the Cholesky factor by Eigen's")
-        w("blocked LLT; the forms by columns that replaced both took fewer instructions and less time at")
-        w("every size from the thresholds on (CHANGELOG), and the thresholds were not measured again.\n")
+        w("border in the last column, for the next change of this header to settle. The Cholesky's was")
+        w("chosen with Eigen's blocked LLT; the factor by columns that replaced it took fewer")
+        w("instructions at every size from the threshold on (CHANGELOG), and it was not measured again.\n")
         w("| kernel | double | float | CPU-time border (double; float) |")
         w("|---|---|---|---|")
         w("| covariance: GEMM from | 9 | 9 | 8; 9 |")

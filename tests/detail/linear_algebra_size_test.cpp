@@ -68,23 +68,23 @@ void expectOuterSumsAgree(std::mt19937_64& rng) {
   const auto d = randomMatrix<Scalar, L, Count>(rng);
   const auto e = randomMatrix<Scalar, M, Count>(rng);
   const auto w = weights<Scalar, Count>();
-  Eigen::Matrix<Scalar, L, L> old, lower, gemm, byColumns, chosen;
+  Eigen::Matrix<Scalar, L, L> old, lower, gemm, triangle, chosen;
   la::weightedOuterSumCoefficientwise(d, d, w, old);
   la::weightedCovarianceLowerCoefficientwise(d, w, lower);
   la::mirrorLowerTriangle(lower);
   la::weightedOuterSumProduct(d, d, w, gemm);
   la::mirrorLowerTriangle(gemm);
-  la::weightedCovarianceLowerByColumns(d, w, byColumns);
-  la::mirrorLowerTriangle(byColumns);
+  la::weightedCovarianceLowerTriangle(d, w, triangle);
+  la::mirrorLowerTriangle(triangle);
   la::weightedCovariance(d, w, chosen);
   const Eigen::Matrix<double, L, L> bound =
       2 * 2 * gamma<Scalar>(Count + 2) *
       (d.cwiseAbs() * w.cwiseAbs().asDiagonal() * d.cwiseAbs().transpose()).template cast<double>();
   EXPECT_TRUE(((gemm - old).template cast<double>().cwiseAbs().array() <= bound.array()).all()) << "L = " << L;
-  EXPECT_TRUE(((byColumns - old).template cast<double>().cwiseAbs().array() <= bound.array()).all()) << "L = " << L;
+  EXPECT_TRUE(((triangle - old).template cast<double>().cwiseAbs().array() <= bound.array()).all()) << "L = " << L;
   EXPECT_TRUE(((lower - old).template cast<double>().cwiseAbs().array() <= bound.array()).all()) << "L = " << L;
   const auto sizes = la::generalKernelsFrom<Scalar>;
-  const auto& expected = L >= sizes.covarianceTriangle ? byColumns : (L >= sizes.covarianceProduct ? gemm : lower);
+  const auto& expected = L >= sizes.covarianceTriangle ? triangle : (L >= sizes.covarianceProduct ? gemm : lower);
   EXPECT_EQ(chosen, expected) << "L = " << L;
   EXPECT_EQ(chosen, chosen.transpose()) << "L = " << L;  // mirrored: exactly symmetric
 

@@ -33,13 +33,15 @@ namespace mjukf::detail {
 // stayed so (`mjukf_kernel_bench`, each kernel in each form at L = 2 … 16, 20, 24, 28, 32, 36;
 // docs/performance-scaling.md says which are a size or two off the CPU-time border), per scalar type,
 // with one exception: the double Cholesky, whose unrolled form stayed up to 10 % faster than Eigen's
-// blocked LLT (the general form then) up to L = 32 but whose code and compile time grow as L³, is
-// general from 20. The choice is made at compile time on the fixed size L (for a point set, of its
-// 2L + 1 or 2L points). MJUKF_GENERAL_KERNELS_FROM overrides them all (scripts/scaling.sh builds the
-// small-size kernels at every size with it).
+// blocked LLT up to L = 32 but whose code and compile time grow as L³, is general from 20. They were
+// measured with the factor by Eigen's blocked LLT; the factor by columns that replaced it took fewer
+// instructions at every size from the threshold on, and the sizes were not measured again. The choice is
+// made at compile time on the fixed size L (for a point set, of its 2L + 1 or 2L points).
+// MJUKF_GENERAL_KERNELS_FROM overrides them all (scripts/scaling.sh builds the small-size kernels at
+// every size with it).
 struct GeneralKernelSizes {
   int covarianceProduct;   // Σ Wᵢ dᵢ dᵢᵀ by GEMM, both triangles
-  int covarianceTriangle;  // … by the lower triangle only, a matrix-vector product per column, mirrored
+  int covarianceTriangle;  // … by a product of the lower triangle only, mirrored
   int crossProduct;        // Σ Wᵢ aᵢ bᵢᵀ by GEMM
   int subtractRankUpdate;  // P − U Uᵀ by a rank-k update of the lower triangle, mirrored
   int cholesky;            // the factor by columns (choleskyLowerByColumns)
@@ -154,9 +156,9 @@ bool choleskyLowerUnrolled(const Eigen::Matrix<Scalar, N, N>& a, Eigen::Matrix<S
 // a_j − S_{j:,0:j} S_{j,0:j}ᵀ, one matrix-vector product, then scaled by the root of its pivot. The
 // pivot is checked as in the unrolled form before its root is taken, so it stops at the first one not
 // above the margin, and a NaN or Inf in the lower triangle of A reaches a later pivot through the column
-// it enters. At L = 20 … 64 it took 3–36 % fewer instructions than Eigen's blocked in-place LLT, the form
-// before, whose blocks of 8 are too small at these sizes to pay for its level-3 kernels (L = 36, double:
-// about 35,000 against 55,000, and a third less time).
+// it enters. At N = 20 … 64 (a callgrind count, double and float) it took 3–36 % fewer instructions than
+// Eigen's blocked in-place LLT, the form before, whose blocks of 8 are too small at these sizes to pay
+// for its level-3 kernels (N = 36, double: about 35,000 against 55,000, and a third less time).
 template <class Scalar, int N>
 bool choleskyLowerByColumns(const Eigen::Matrix<Scalar, N, N>& a, Eigen::Matrix<Scalar, N, N>& s) {
   constexpr Scalar margin = Scalar(N) * std::numeric_limits<Scalar>::epsilon();
@@ -303,9 +305,9 @@ void forEachLowerColumn(F&& f) {
 //    (weightedOuterSumCoefficientwise) up to the order of its sums, which Eigen's vectorisation chooses
 //    (that full sum is not exactly symmetric either: (Wₖ aᵢₖ) aⱼₖ and (Wₖ aⱼₖ) aᵢₖ round apart);
 //  - from covarianceProduct, GEMM (both triangles: its packing costs more than the half it could skip);
-//  - from covarianceTriangle, the lower triangle only, one matrix-vector product per column. At L = 36
-//    it took 7 % (double) and 10 % (float) fewer instructions than Eigen's product into the lower
-//    triangle, the form before (which packs both operands as for a GEMM), and 14–24 % less time.
+//  - from covarianceTriangle, a product of the lower triangle only. (One matrix-vector product per
+//    column took 7–23 % fewer instructions at L = 20, 24, 28 and 36, but 2 % (double) and 14 % (float)
+//    more at 32, the chain's n = 32: not taken.)
 template <class Dev, class Weights, class Out>
 void weightedCovarianceLowerCoefficientwise(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase<Weights>& weights,
                                             Eigen::MatrixBase<Out>& out) {
@@ -316,22 +318,16 @@ void weightedCovarianceLowerCoefficientwise(const Eigen::MatrixBase<Dev>& d, con
   });
 }
 template <class Dev, class Weights, class Out>
-void weightedCovarianceLowerByColumns(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase<Weights>& weights,
-                                      Eigen::MatrixBase<Out>& out) {
-  constexpr int N = Dev::RowsAtCompileTime;
-  // The weighted deviations stored by point, so that each coefficient is a dot product over the points
-  // of two contiguous columns.
-  const Eigen::Matrix<typename Out::Scalar, Dev::ColsAtCompileTime, N> weighted =
-      (d * weights.asDiagonal()).transpose();
-  for (int c = 0; c < N; ++c)
-    out.col(c).tail(N - c).noalias() = weighted.rightCols(N - c).transpose() * d.row(c).transpose();
+void weightedCovarianceLowerTriangle(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase<Weights>& weights,
+                                     Eigen::MatrixBase<Out>& out) {
+  out.template triangularView<Eigen::Lower>() = (d * weights.asDiagonal()) * d.transpose();
 }
 template <class Dev, class Weights, class Out>
 void weightedCovarianceLower(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase<Weights>& weights,
                              Eigen::MatrixBase<Out>& out) {
   constexpr int L = Dev::ColsAtCompileTime / 2;
   if constexpr (atLeast<L>(generalKernelsFrom<typename Out::Scalar>.covarianceTriangle))
-    weightedCovarianceLowerByColumns(d, weights, out);
+    weightedCovarianceLowerTriangle(d, weights, out);
   else if constexpr (atLeast<L>(generalKernelsFrom<typename Out::Scalar>.covarianceProduct))
     weightedOuterSumProduct(d, d, weights, out);
   else
