@@ -328,7 +328,7 @@ TEST(NoAllocation, CallsWithoutInput) {
 }
 
 #ifndef MJUKF_NO_ALLOCATION_CORE
-// The kernels' general forms (matrix products, products by columns, rank-k update; detail/linear_algebra.hpp)
+// The kernels' general forms (matrix products, rank-k update, the factor by columns; detail/linear_algebra.hpp)
 // allocate nothing either: a JUKF at L = 36 and a float UKF at L = 32 on the chain of masses, on the heap
 // (about 190 KB and 60 KB), and an automatic MJUKF at n = 20 (Eigen's eigensolver, the joint covariance
 // by blocks).
