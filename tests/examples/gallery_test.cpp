@@ -183,3 +183,22 @@ TEST(Gallery, TheDualsSigmaIsHonestWhereThePlantIsItsModel) {
 }
 
 }  // namespace
+
+// `true-start` starts every filter at the truth, `static` at the first guess: after the block's first
+// reading (0.1 s), which moves G_ba by about 1e-8 of itself (the slow temperature hardly changes in that
+// time), each filter's G_ba is still where the scenario started it: 10 W/K (the truth) or 5 (the guess).
+TEST(Gallery, TrueStartBeginsEveryFilterAtTheTruth) {
+  const std::string dir = scratch("true_start");
+  const Result r = run(kGallery + " heated_block study --seeds 1 --filters jukf,mjukf-auto,dual --jobs 1" +
+                       " --scenarios static,true-start --duration 0.1 --out-dir " + shellQuote(dir));
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  const auto rows = readCsv(dir + "/heated_block_study.csv");
+  ASSERT_EQ(rows.size(), 1u + 2 * 3);
+  const std::size_t finalSecond = 3 + 2 + 5 + 1;  // final_G_ba
+  ASSERT_EQ(rows[0][finalSecond], "final_G_ba");
+  for (std::size_t row = 1; row < rows.size(); ++row) {
+    const bool truthStart = rows[row][2] == "true-start";
+    const double expected = truthStart ? 10.0 : 5.0;
+    EXPECT_NEAR(std::stod(rows[row][finalSecond]), expected, 1e-3 * expected) << rows[row][1] << " " << rows[row][2];
+  }
+}

@@ -62,9 +62,10 @@ void printUsage(std::ostream& out) {
       << "      Scenarios (default static): static" << (change ? ", change (the parameter change)" : "")
       << ", and faults forced on\n"
       << "      the filters: jump (every parameter x1.25 halfway, which constant-parameter presets cannot follow),\n"
-      << "      sensor-gain (the data's y x1.1), small-q (every filter's Q of the state x1e-4); and matched, the\n"
+      << "      sensor-gain (the data's y x1.1), small-q (every filter's Q of the state x1e-4); matched, the\n"
       << "      plant drawn with the noise the filters assume (the dual UKF's Q, Q_theta and R, given to every "
-         "filter).\n"
+         "filter);\n"
+      << "      and true-start, the static data with every filter started at the true state and parameters.\n"
       << "\n"
       << "Output files are written under temporary names and put in place only when the whole run has\n"
       << "succeeded: a run that fails or is stopped replaces nothing and leaves no partial file.\n"

@@ -45,7 +45,7 @@ Scalar chiSquaredUpperQuantile(int p, Scalar alpha) {
 }
 
 /// A score test over a fading window. With gⱼ = ψⱼᵀ Sⱼ⁻¹ νⱼ (ψ = ∂ŷ/∂θ̂, S the innovations' covariance the
-/// joint covariance predicts, ν = y − g(x̂⁻, θ̂)) and λ the memory's forgetting factor, it keeps
+/// joint covariance predicts, ν = y − ŷ, the state's innovation) and λ the memory's forgetting factor, it keeps
 ///   s = Σ λ^(k−j) gⱼ,   V = Σ λ^(2(k−j)) gⱼ gⱼᵀ,   I = Σ λ^(k−j) ψⱼᵀ Sⱼ⁻¹ ψⱼ,
 /// and tests z = sᵀ V⁻¹ s against χ²ₚ's 1 − α quantile. With θ constant the innovations are white and of
 /// mean zero, so s has covariance V and z is about χ²ₚ; a change δ of θ adds about I δ to s, and its least

@@ -350,6 +350,8 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
       return static_cast<void>(measurementNoise), true;
   }
   const Diagnostics& diagnostics() const { return diagnostics_; }
+  /// The diagnostics of the measurement update in progress (after correct(), before its commit).
+  const Diagnostics& candidateDiagnostics() const { return candidateDiagnostics_; }
   const SigmaPoints& sigmaPoints() const { return sigmaPoints_; }
   /// The committed estimate as the prior of a measurement update: of its own points() (`drawnNow`
   /// false, hasPoints()), or of points just drawn from it (true).
@@ -786,8 +788,8 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
 };
 
 // What a measurement update hands the parameter policy once the state's correction succeeded: the
-// measurement, its input, which components are present, the points' images Yᵢ, the prior mean, and the gain's
-// factors U = P_xy S⁻ᵀ and S (P_yy = S Sᵀ).
+// measurement, its input, which components are present, the points' images Yᵢ, the prior mean, the gain's
+// factors U = P_xy S⁻ᵀ and S (P_yy = S Sᵀ), and the innovation y − ŷ.
 template <class Model, class Settings, class Est>
 struct Correction {
   const Model& model;
@@ -799,6 +801,7 @@ struct Correction {
   const typename Est::Vector& priorMean;
   const typename Est::CrossMatrix& gainFactor;
   const typename Est::MeasMatrix& innovationFactor;
+  const typename Est::MeasVector& innovation;  // ν = y − ŷ, ŷ the points' weighted mean (zero where missing)
 };
 
 // ==== 3. The parameter policy =========================================================================
@@ -1427,9 +1430,9 @@ class UnscentedEngine {
                                            present, settings_.gate);
         s != Status::Ok)
       return s;
-    const Status parameters = policy_.correctParameters(
-        Correction<Model, Settings, Est>{model_, settings_, y, u, present, estimate_.measuredPoints(), prior.mean,
-                                         estimate_.gainFactor(), estimate_.innovationFactor()});
+    const Status parameters = policy_.correctParameters(Correction<Model, Settings, Est>{
+        model_, settings_, y, u, present, estimate_.measuredPoints(), prior.mean, estimate_.gainFactor(),
+        estimate_.innovationFactor(), estimate_.candidateDiagnostics().innovation});
     if (!taken(parameters)) return parameters;
     if (!allFinite(estimate_.candidateMean())) return Status::NonFiniteResult;
     const Status settled = estimate_.settle(settings_.repair);
