@@ -453,9 +453,9 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
     whitenedSensitivity_ = psi;
     detail::solveLowerInPlace(jointInnovationFactor_, whitenedSensitivity_);  // L⁻¹ ψ
     // ν = y − ŷ, the state's innovation (zero where missing), whose mean is zero while θ is constant: ŷ,
-    // the points' mean, carries g's curvature over P⁻, which y − g(x̂⁻, θ̂) lacks (½ tr(∇²g P⁻) to second
-    // order). On the battery (OCV(z) curved, P⁻ wide at the start) that bias fired the test all along its
-    // runs (docs/algorithms.md §5.4).
+    // the points' mean, carries g's curvature over the points' spread and, where g depends on θ, the θᵢ's
+    // spread; y − g(x̂⁻, θ̂) lacks both. On the battery the two differed by about 2 mV (its sensor's noise)
+    // over the first hundred updates, which fired the test (docs/algorithms.md §5.4).
     Meas whitenedInnovation = c.innovation;
     detail::solveLowerInPlace(jointInnovationFactor_, whitenedInnovation);  // L⁻¹ ν
     // Tested once the easing's first ramp is over, on a window of at least a tenth of the memory.
