@@ -96,7 +96,8 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
       : estimate_(Validated{}, s.parameterSigmaPoints, s.parameterProcessNoise,
                   s.measurementNoise + s.parameterObservationNoise),
         boundsActive_(s.parameterBounds.active()),
-        storesStep_(s.ordering == DualUkfOrdering::UpdatedParameters) {
+        storesStep_(s.ordering == DualUkfOrdering::UpdatedParameters),
+        walks_(s.parameterForgetting != Scalar(1) || !s.parameterProcessNoise.isZero()) {
     estimate_.assign(initialParameters, s.initialParameterCovariance);  // checked in validate()
   }
 
@@ -115,8 +116,9 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
   }
 
   // The parameter time update, θ̂⁻ = θ̂, P^θ⁻ = P^θ / λ + Q_θ (square-root form: S^θ⁻ from
-  // [S^θ / √λ | G_θ] by Householder), and the propagation of x̂_{k−1} + W (θⱼ − θ̂) with each θⱼ of
-  // (θ̂⁻, P^θ⁻) over the step, into the candidates; then W⁻ = ∂Φ/∂θ̂ of those propagations.
+  // [S^θ / √λ | G_θ] by Householder); what the walk does to the state given θ (startFromWalk); and the
+  // propagation of x̂_{k−1} + W_G (θⱼ − θ̂) with each θⱼ of (θ̂⁻, P^θ⁻) over the step, into the candidates;
+  // then W⁻ = ∂Φ/∂θ̂ of those propagations.
   template <class Step>
   Status predictParameters(const Step& step, const Est& state) {
     const Settings& s = step.settings;
@@ -124,25 +126,32 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
     pe.predictRandomWalk(s.parameterForgetting, s.parameterProcessNoise);
     const Status settled = pe.settle(s.repair);
     if (!taken(settled)) return settled;
+    if (walks_) {
+      if (const Status st = startFromWalk(s, state); st != Status::Ok) return st;
+    } else {
+      candidateStartSensitivity_ = sensitivity_;
+      if (storesStep_) candidatePriorFactor_ = state.factor();
+    }
     if (const Status drawn = pe.draw(pe.candidateMean(), pe.candidateFactor()); drawn != Status::Ok) return drawn;
     const Param& center = pe.candidateMean();
     for (int j = 0; j < ParameterCount; ++j) {
       const Param theta = pe.workPoints().col(j);
-      candidatePropagatedStates_.col(j) = step.propagate(theta, State(state.mean() + sensitivity_ * (theta - center)));
+      candidatePropagatedStates_.col(j) =
+          step.propagate(theta, State(state.mean() + candidateStartSensitivity_ * (theta - center)));
     }
     if (!allFinite(candidatePropagatedStates_)) return Status::NonFiniteResult;
-    // W⁻ = A W + B over this step, by the statistical linear regression of the propagations on the θⱼ;
+    // W⁻ = A W_G + B over this step, by the statistical linear regression of the propagations on the θⱼ;
     // the change over the open-loop steps since the last time update (the mean alone was propagated
     // there) is extrapolated from it, first-order right when they are short against the dynamics.
     regressOnParameters(candidatePropagatedStates_, pe.workPoints(), center, pe.candidateFactor(),
                         candidatePredictedSensitivity_);
     const Scalar extrapolation = (openLoopTime_ + step.interval()) / step.interval();
-    candidatePredictedSensitivity_ = sensitivity_ + extrapolation * (candidatePredictedSensitivity_ - sensitivity_);
+    candidatePredictedSensitivity_ =
+        candidateStartSensitivity_ + extrapolation * (candidatePredictedSensitivity_ - candidateStartSensitivity_);
     if (!allFinite(candidatePredictedSensitivity_)) return Status::NonFiniteResult;
     if (s.ordering == DualUkfOrdering::UpdatedParameters) {
       constexpr bool held = std::is_same_v<typename Step::InputType, HeldInput<Model>>;
       candidatePriorMean_ = state.mean();
-      candidatePriorFactor_ = state.factor();
       candidateStep_.t = step.t;
       candidateStep_.h = step.h;
       candidateStep_.steps = step.steps;
@@ -150,6 +159,11 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
       if constexpr (held) candidateStep_.held = step.input.value;
     }
     return settled;
+  }
+  // The lower factor the state's time update draws its points from: P_{k−1}'s, or with a random walk
+  // the factor of P_{k−1} + W C Wᵀ (startFromWalk).
+  const typename Est::Matrix& priorFactor(const Est& state) const {
+    return walks_ ? candidatePriorFactor_ : state.factor();
   }
   // χᵢ⁺ = Φ_h(χᵢ; t, θ̂)
   template <class Step>
@@ -222,6 +236,7 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
     if (storesStep_) {
       priorMean_ = candidatePriorMean_;
       priorFactor_ = candidatePriorFactor_;
+      startSensitivity_ = candidateStartSensitivity_;
       step_ = candidateStep_;
       hasPrior_ = true;
     }
@@ -333,14 +348,42 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
     repredictedCovariance_ = engine.estimate_.candidateCovariance();
     return settled;
   }
-  // x̂_{k−1} given the corrected θ̂_k: moved by W (θ̂_k − θ̂_{k−1}).
-  State shiftedPriorMean() const { return priorMean_ + sensitivity_ * (estimate_.candidateMean() - estimate_.mean()); }
+  // x̂_{k−1} given the corrected θ̂_k: moved by W_G (θ̂_k − θ̂_{k−1}) (W_G = W without a random walk).
+  State shiftedPriorMean() const {
+    return priorMean_ + startSensitivity_ * (estimate_.candidateMean() - estimate_.mean());
+  }
   template <class Engine>
   Status predictAgainHeld(Engine& engine) {
     const HeldInput<Model> input{step_.held};
     const TimeStep<Model, Integrator, HeldInput<Model>, typename Engine::Settings> step{
         engine.model(), engine.integrator(), engine.settings(), input, step_.t, step_.h, step_.steps};
     return engine.predict(step, shiftedPriorMean(), priorFactor_);
+  }
+
+  // The random walk θ_k = θ_{k−1} + η (with forgetting, cov(η) = N = P^θ (1/λ − 1) + Q_θ) leaves x_{k−1}
+  // less tied to θ_k than to θ_{k−1} (docs/algorithms.md §9): given θ_k, θ_{k−1} ~ N(θ̂ + G (θ_k − θ̂), C)
+  // with G = P^θ (P^θ⁻)⁻¹ and C = G N, so x_{k−1} | θ_k ~ N(x̂ + W G (θ_k − θ̂), P + W C Wᵀ). Into the
+  // candidates: W_G = W G, and the factor of P + W C Wᵀ the state's time update draws from. Exact for a
+  // plant linear in x and θ (tests/dual_consistency_test.cpp); W C Wᵀ is the state's error the walk
+  // adds, which a filter that keeps W G alone and P would leave out (σ_θ too small).
+  Status startFromWalk(const Settings& s, const Est& state) {
+    const ParameterEstimate& pe = estimate_;
+    using ParamMatrix = Eigen::Matrix<Scalar, ParamDim, ParamDim>;
+    ParamMatrix gainTransposed = pe.covariance();  // Gᵀ = (P^θ⁻)⁻¹ P^θ = S⁻ᵀ S⁻¹ P^θ
+    solveLowerInPlace(pe.candidateFactor(), gainTransposed);
+    solveUpperInPlace(pe.candidateFactor(), gainTransposed);
+    candidateStartSensitivity_.noalias() = sensitivity_ * gainTransposed.transpose();
+    // N from the settings rather than as P^θ⁻ − P^θ, which cancels where the walk is small against P^θ.
+    const ParamMatrix walk =
+        pe.covariance() * (Scalar(1) / s.parameterForgetting - Scalar(1)) + s.parameterProcessNoise;
+    ParamMatrix kept;  // C = G N, symmetric positive semi-definite (= (P^θ⁻¹ + N⁻¹)⁻¹ where both exist)
+    kept.noalias() = gainTransposed.transpose() * walk;
+    symmetrize(kept);
+    StateMatrix widened = state.covariance();
+    widened.noalias() += sensitivity_ * kept * sensitivity_.transpose();
+    symmetrize(widened);
+    if (!choleskyLower(widened, candidatePriorFactor_)) return Status::NotPositiveDefinite;
+    return Status::Ok;
   }
 
   // observationNoise_ = the state filter's H P⁻ Hᵀ + R from its points of the coming correction, measured
@@ -367,6 +410,7 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
   Eigen::Matrix<Scalar, MeasDim, MeasDim> observationNoise_ = decltype(observationNoise_)::Zero();  // of this step
   bool boundsActive_;
   bool storesStep_;  // the UpdatedParameters ordering
+  bool walks_;       // P^θ⁻ ≠ P^θ: Q_θ ≠ 0 or λ < 1 (startFromWalk)
   MeasurementGate<Scalar, MeasDim> noGate_;
   PropagatedStates propagatedStates_ = PropagatedStates::Zero();  // Φ_h(x̂_{k−1} + W Δθⱼ; θⱼ), last time update
   Sensitivity sensitivity_ = Sensitivity::Zero();                 // W = ∂x̂/∂θ̂ after the last correction
@@ -375,6 +419,7 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
   // The UpdatedParameters ordering: the state filter's prior of the last time update and its step.
   State priorMean_ = State::Zero();
   StateMatrix priorFactor_ = StateMatrix::Zero();
+  Sensitivity startSensitivity_ = Sensitivity::Zero();  // W_G of the last time update
   StoredStep step_;
   bool hasPrior_ = false;
   bool useCorrectedParameters_ = false;
@@ -382,7 +427,8 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
   // Workspace, committed only with the step that made it.
   PropagatedStates candidatePropagatedStates_ = PropagatedStates::Zero();
   State candidatePriorMean_ = State::Zero();
-  StateMatrix candidatePriorFactor_ = StateMatrix::Zero();
+  StateMatrix candidatePriorFactor_ = StateMatrix::Zero();       // the factor the state's time update draws from
+  Sensitivity candidateStartSensitivity_ = Sensitivity::Zero();  // W_G (startFromWalk), or W
   StoredStep candidateStep_;
   State repredictedMean_ = State::Zero();
   StateMatrix repredictedCovariance_ = StateMatrix::Zero();

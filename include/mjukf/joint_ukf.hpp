@@ -55,6 +55,7 @@ class AugmentedParameters : public ParameterPolicy<Model, Integrator, Settings, 
       points.col(i).template head<StateDim>() = step.propagate(theta, points.col(i).template head<StateDim>());
     }
   }
+  const typename Est::Matrix& priorFactor(const Est& state) const { return state.factor(); }
   static constexpr bool raisesPriorCovariance = false;
   const typename Est::Matrix* priorCovarianceFloor() const { return nullptr; }  // Q alone
   template <class Step>

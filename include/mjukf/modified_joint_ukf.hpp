@@ -308,6 +308,7 @@ class ModifiedJointParameters : public ParameterPolicy<Model, Integrator, Settin
         found && step.settings.adaptiveScaling && step.settings.parameterUncertaintyInState &&
         errorCovariance_.stateErrorCovariance(sensitivity_.candidateStateSensitivity(), stateErrorCovariance_);
   }
+  const typename Est::Matrix& priorFactor(const Est& state) const { return state.factor(); }
   // Σ = cov(η + W⁻ e) for this time update's P⁻ to cover (parameterUncertaintyInState), or null.
   static constexpr bool raisesPriorCovariance = Automatic;
   const typename Est::Matrix* priorCovarianceFloor() const {

@@ -47,6 +47,7 @@ class KnownParameters : public ParameterPolicy<Model, Integrator, Settings, Est>
   void propagatePoints(const Step& step, Points& points) {
     for (int i = 0; i < Base::Count; ++i) points.col(i) = step.propagate(parameters_, points.col(i));
   }
+  const typename Est::Matrix& priorFactor(const Est& state) const { return state.factor(); }
   static constexpr bool raisesPriorCovariance = false;
   const typename Est::Matrix* priorCovarianceFloor() const { return nullptr; }  // Q alone
   template <class Step>

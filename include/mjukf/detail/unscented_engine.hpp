@@ -812,6 +812,9 @@ struct Correction {
 // called. With Est the engine's Estimate, Step a TimeStep and Engine the filter:
 //
 //   template <class Step> Status predictParameters(const Step&, const Est& state);   before the state's points
+//   const Matrix& priorFactor(const Est& state) const; the lower factor the time update draws the state's
+//                                                    points from (after predictParameters): state.factor(),
+//                                                    or the dual's, widened by its parameters' random walk
 //   template <class Step> void propagatePoints(const Step&, Points& points);          χᵢ⁺ = Φ(χᵢ), in place
 //   const Matrix* priorCovarianceFloor() const;       a covariance this time update's P⁻ must cover, or null
 //   static constexpr bool raisesPriorCovariance;      optional, the one member with a default (true, always
@@ -841,6 +844,9 @@ void returnsBool(T);
 MJUKF_POLICY_HAS(predictParameters,
                  std::declval<P&>().predictParameters(std::declval<const typename P::CheckStep&>(),
                                                       std::declval<const typename P::CheckEstimate&>()))
+MJUKF_POLICY_HAS(priorFactor,
+                 static_cast<const typename P::CheckEstimate::Matrix&>(
+                     std::declval<const P&>().priorFactor(std::declval<const typename P::CheckEstimate&>())))
 MJUKF_POLICY_HAS(propagatePoints,
                  std::declval<P&>().propagatePoints(std::declval<const typename P::CheckStep&>(),
                                                     std::declval<typename P::CheckEstimate::Points&>()))
@@ -870,6 +876,8 @@ template <class Policy>
 constexpr bool checkParameterPolicy() {
   static_assert(PolicyHas_predictParameters<Policy>::value,
                 "parameter policy: missing member predictParameters(const Step&, const Estimate&) -> Status");
+  static_assert(PolicyHas_priorFactor<Policy>::value,
+                "parameter policy: missing member priorFactor(const Estimate&) const -> const Matrix&");
   static_assert(PolicyHas_propagatePoints<Policy>::value,
                 "parameter policy: missing member propagatePoints(const Step&, Points&)");
   static_assert(PolicyHas_priorCovarianceFloor<Policy>::value,
@@ -1314,7 +1322,7 @@ class UnscentedEngine {
     const Status parameters = policy_.predictParameters(step, estimate_);
     if (!input.allValuesFinite()) return Status::NonFiniteInput;
     if (!taken(parameters)) return parameters;
-    const Status settled = predict(step, estimate_.mean(), estimate_.factor());
+    const Status settled = predict(step, estimate_.mean(), policy_.priorFactor(estimate_));
     if (!input.allValuesFinite()) return Status::NonFiniteInput;  // the model's input(t) gave NaN or ±Inf
     if (!taken(settled)) return settled;
     const bool moved = policy_.constrainMean(estimate_.candidateMean());
