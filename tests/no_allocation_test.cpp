@@ -115,6 +115,21 @@ struct Automatic {
   }
 };
 
+// `Base`'s dual filter with parameters that walk (Q_θ ≠ 0, λ < 1): its time update starts from W G and
+// P + W C Wᵀ (docs/algorithms.md §9), a path the presets, whose parameters are constant, never take.
+template <class Base>
+struct Walking {
+  static auto make() {
+    const auto preset = Base::make();
+    auto s = preset.settings();
+    using Scalar = typename decltype(preset)::Scalar;
+    s.parameterProcessNoise.setIdentity();
+    s.parameterProcessNoise *= Scalar(1e-8);
+    s.parameterForgetting = Scalar(0.999);
+    return std::decay_t<decltype(preset)>(preset.model(), preset.state(), preset.parameters(), s);
+  }
+};
+
 // `Base`'s hand-tuned MJUKF following the covariance of θ̂ (the presets, the paper's, do not).
 template <class Base>
 struct FollowingParameterCovariance {
@@ -156,10 +171,10 @@ constexpr auto kPrior = mjukf::DualUkfOrdering::PriorParameters;
 constexpr auto kUpdated = mjukf::DualUkfOrdering::UpdatedParameters;
 #ifdef MJUKF_NO_ALLOCATION_CORE
 // The quick tier's core (tests/CMakeLists.txt): each filter kind, in double and float, the automatic
-// MJUKF, a discrete-time model and the square-root form, one case each.
+// MJUKF, the dual with parameters that walk, a discrete-time model and the square-root form, one case each.
 using Cases =
     ::testing::Types<Case<mjukf::Ukf, Robot>, Case<mjukf::JointUkf, Tank>, Case<mjukf::ModifiedJointUkf, RobotF>,
-                     DualCase<Robot, kUpdated>, Automatic<Case<mjukf::ModifiedJointUkf, Robot>>,
+                     Walking<DualCase<Robot, kUpdated>>, Automatic<Case<mjukf::ModifiedJointUkf, Robot>>,
                      DiscreteCase<mjukf::DualUkf, double, kPrior>, Case<SquareRoot<mjukf::JointUkf>::Filter, Robot>>;
 #else
 using Cases = ::testing::Types<
@@ -171,7 +186,8 @@ using Cases = ::testing::Types<
     DiscreteCase<mjukf::DualUkf, double>, DiscreteCase<mjukf::DualUkf, double, kUpdated>,
     DiscreteCase<mjukf::ModifiedJointUkf, float>, Case2019<mjukf::JointUkf, VanDerPol>,
     Case2019<mjukf::ModifiedJointUkf, VanDerPol>, Case2019<mjukf::DualUkf, VanDerPol>,
-    Case2019<mjukf::JointUkf, Lorenz>, Case2019<mjukf::ModifiedJointUkf, Lorenz>,
+    Case2019<mjukf::JointUkf, Lorenz>, Case2019<mjukf::ModifiedJointUkf, Lorenz>, Walking<DualCase<Robot, kPrior>>,
+    Walking<DualCase<Robot, kUpdated>>, Walking<DualCase<RobotF, kPrior>>,
     Automatic<Case<mjukf::ModifiedJointUkf, Robot>>, Automatic<Case<mjukf::ModifiedJointUkf, Tank>>,
     Automatic<Case<mjukf::ModifiedJointUkf, RobotF>>, Automatic<DiscreteCase<mjukf::ModifiedJointUkf, double>>,
     Automatic<DiscreteCase<mjukf::ModifiedJointUkf, float>>, Automatic<Case2019<mjukf::ModifiedJointUkf, VanDerPol>>,
@@ -183,6 +199,7 @@ using Cases = ::testing::Types<
     Case<SquareRoot<mjukf::ModifiedJointUkf>::Filter, Tank>, Case<SquareRoot<mjukf::JointUkf>::Filter, RobotF>,
     DualCase<Robot, kPrior, SquareRoot<mjukf::DualUkf>::Filter>,
     DualCase<Robot, kUpdated, SquareRoot<mjukf::DualUkf>::Filter>,
+    Walking<DualCase<Robot, kUpdated, SquareRoot<mjukf::DualUkf>::Filter>>,
     DiscreteCase<SquareRoot<mjukf::DualUkf>::Filter, float, kUpdated>,
     Automatic<Case<SquareRoot<mjukf::ModifiedJointUkf>::Filter, Robot>>,
     AlphaBelowOne<Case<SquareRoot<mjukf::JointUkf>::Filter, Robot>>, AlphaBelowOne<Case<mjukf::JointUkf, Robot>>>;

@@ -36,6 +36,7 @@ struct Policy : mjukf::detail::ParameterPolicy<Plant, Integrator, Settings, Est>
     for (int i = 0; i < Est::Count; ++i) points.col(i) = step.propagate(theta, points.col(i));
   }
 #endif
+  const Est::Matrix& priorFactor(const Est& state) const { return state.factor(); }
   const Est::Matrix* priorCovarianceFloor() const { return nullptr; }
   template <class Step>
   Est::Vector propagateMean(const Step& step, const Est::Vector& mean) {

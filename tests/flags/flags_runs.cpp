@@ -1,8 +1,9 @@
-// Runs JUKF, the automatic MJUKF and the dual UKF over the reference files and prints every final
-// estimate to 17 digits. tests/flags/CMakeLists.txt builds it twice, as the other tests are built and
-// with -march=native -ffp-contract=fast (fused multiply-adds, other vector code), and compares the two
-// outputs (compare_runs.cmake): a filter whose result depends on the compiler's rounding choices
-// beyond 1e-6 relative amplifies rounding somewhere, and that is a defect (docs/tuning-mjukf.md).
+// Runs JUKF, the automatic MJUKF and the dual UKF (without and with a walk of its parameters) over the
+// reference files and prints every final estimate to 17 digits. tests/flags/CMakeLists.txt builds it
+// twice, as the other tests are built and with -march=native -ffp-contract=fast (fused multiply-adds,
+// other vector code), and compares the two outputs (compare_runs.cmake): a filter whose result depends
+// on the compiler's rounding choices beyond 1e-6 relative amplifies rounding somewhere, and that is a
+// defect (docs/tuning-mjukf.md).
 
 #include <cstdio>
 #include <string>
@@ -42,6 +43,13 @@ void runAll(const char* name, const std::string& file) {
   mjukf::DualUkf<Model> dual(Model(), Experiment::initialState(), Experiment::initialParameters(),
                              Experiment::dualUkf());
   run((std::string(name) + " dual").c_str(), dual, y, h, every);
+  // The dual with parameters that walk (its time update's W G and P + W C Wᵀ, docs/algorithms.md §9),
+  // the walk the robot's parameter-change run gives it.
+  auto walking = Experiment::dualUkf();
+  walking.parameterProcessNoise.setIdentity();
+  walking.parameterProcessNoise *= 1e-5;
+  mjukf::DualUkf<Model> walkingDual(Model(), Experiment::initialState(), Experiment::initialParameters(), walking);
+  run((std::string(name) + " dual-walking").c_str(), walkingDual, y, h, every);
 }
 
 }  // namespace
