@@ -204,39 +204,42 @@ struct WalkingGainsMotor {
   using Meas = Eigen::Matrix<double, 1, 1>;
   using Input = Eigen::Matrix<double, 2, 1>;
   static constexpr double kDecay = 0.95, kStep = 0.01;
+  double unit = 1;  // θ is given in this unit: θ = 1e-6 is a gain of 1 when unit = 1e-6
   State transition(double, double dt, const State& x, const Input& u, const Param& theta) const {
-    return State(x(0) + dt * x(1), kDecay * x(1) + theta.dot(u));
+    return State(x(0) + dt * x(1), kDecay * x(1) + theta.dot(u) / unit);
   }
   Meas measurement(const State& x, const Param&) const { return Meas(x(0)); }
   static Input input(int k) { return Input((k / 40) % 2 ? 1.0 : -1.0, (k / 70) % 2 ? 0.5 : 1.0); }
 };
 
 // The worst gaps between a DualUkf and the augmented Kalman filter over one run of `steps` steps, with the
-// parameters' random walk Q_θ = q I and forgetting λ: |θ̂ − θ̂_KF| and |P^θ − P^θ_KF| / max diag P^θ_KF.
+// parameters' random walk Q_θ = q I and forgetting λ, θ in units of `unit`: |θ̂ − θ̂_KF| / unit and
+// |P^θ − P^θ_KF| / max diag P^θ_KF.
 struct GapToOptimal {
   double mean = 0, covariance = 0;
 };
 template <class Form>
-GapToOptimal gapToOptimal(double q, double forgetting, DualUkfOrdering ordering, int steps) {
+GapToOptimal gapToOptimal(double q, double forgetting, DualUkfOrdering ordering, int steps, double unit = 1) {
   using Model = WalkingGainsMotor;
   using Filter = mjukf::DualUkf<Model, mjukf::DefaultIntegrator<Model>, mjukf::MerweScaled, Form>;
   constexpr double speedNoise = 0.05, angleNoise = 0.002;
   typename Filter::Settings s;
   s.initialCovariance.diagonal() << 1e-4, 1e-2;
-  s.processNoise.diagonal() << 1e-12, speedNoise * speedNoise;
+  s.processNoise.diagonal() << 0.0, speedNoise * speedNoise;  // none on the measured angle: see the test
   s.measurementNoise << angleNoise * angleNoise;
-  s.initialParameterCovariance.diagonal() << 0.25, 0.25;
-  s.parameterProcessNoise = q * Eigen::Matrix2d::Identity();
+  s.initialParameterCovariance.diagonal() << 0.25 * unit * unit, 0.25 * unit * unit;
+  s.parameterProcessNoise = q * unit * unit * Eigen::Matrix2d::Identity();
   s.parameterForgetting = forgetting;
   s.ordering = ordering;
-  const Model model;
-  Model::Param theta(0.8, -0.5);
-  const Model::Param guess(0.5, -0.2);
+  Model model;
+  model.unit = unit;
+  Model::Param theta = unit * Model::Param(0.8, -0.5);
+  const Model::Param guess = unit * Model::Param(0.5, -0.2);
   Filter dual(model, Model::State::Zero(), guess, s);
   Eigen::Vector4d z;  // [x; θ] of the augmented Kalman filter
   z << 0.0, 0.0, guess;
   Eigen::Matrix4d P = Eigen::Matrix4d::Zero();
-  P.diagonal() << 1e-4, 1e-2, 0.25, 0.25;
+  P.diagonal() << 1e-4, 1e-2, 0.25 * unit * unit, 0.25 * unit * unit;
   const Eigen::RowVector4d H(1.0, 0.0, 0.0, 0.0);
   std::mt19937_64 random(7);
   std::normal_distribution<double> normal;
@@ -244,22 +247,23 @@ GapToOptimal gapToOptimal(double q, double forgetting, DualUkfOrdering ordering,
   GapToOptimal gap;
   for (int k = 0; k < steps; ++k) {
     const Model::Input u = Model::input(k);
-    theta += std::sqrt(q) * Model::Param(normal(random), normal(random));
+    theta += std::sqrt(q) * unit * Model::Param(normal(random), normal(random));
     x = model.transition(0.0, Model::kStep, x, u, theta);
     x(1) += speedNoise * normal(random);
     const Model::Meas y(x(0) + angleNoise * normal(random));
     EXPECT_EQ(dual.timeUpdate(k * Model::kStep, Model::kStep, u), Status::Ok) << k;
     EXPECT_EQ(dual.measurementUpdate(y), Status::Ok) << k;
-    // θ_k = θ_{k−1} + η with cov(η) = N = P^θθ (1/λ − 1) + Q_θ (forgetting as a walk), then x_k with θ_k.
+    // θ_k = θ_{k−1} + η with cov(η) = N = P^θθ (1 − λ) / λ + Q_θ (forgetting as a walk), then x_k with θ_k.
     Eigen::Matrix4d A = Eigen::Matrix4d::Identity();
     A(0, 1) = Model::kStep;
     A(1, 1) = Model::kDecay;
-    A(1, 2) = u(0);
-    A(1, 3) = u(1);
+    A(1, 2) = u(0) / unit;
+    A(1, 3) = u(1) / unit;
     Eigen::Matrix<double, 4, 2> walkInto = Eigen::Matrix<double, 4, 2>::Zero();  // where η enters [x; θ]
-    walkInto.row(1) = u.transpose();
+    walkInto.row(1) = u.transpose() / unit;
     walkInto.bottomRows<2>().setIdentity();
-    const Eigen::Matrix2d walk = P.bottomRightCorner<2, 2>() * (1.0 / forgetting - 1.0) + s.parameterProcessNoise;
+    const Eigen::Matrix2d walk =
+        P.bottomRightCorner<2, 2>() * ((1.0 - forgetting) / forgetting) + s.parameterProcessNoise;
     z = A * z;
     P = (A * P * A.transpose() + walkInto * walk * walkInto.transpose()).eval();
     P.topLeftCorner<2, 2>() += s.processNoise;
@@ -272,7 +276,7 @@ GapToOptimal gapToOptimal(double q, double forgetting, DualUkfOrdering ordering,
     const Eigen::Matrix4d kept = Eigen::Matrix4d::Identity() - K * H;
     P = (kept * P * kept.transpose() + K * (angleNoise * angleNoise) * K.transpose()).eval();
     const Eigen::Matrix2d optimal = P.bottomRightCorner<2, 2>();
-    gap.mean = std::max(gap.mean, (dual.parameters() - z.tail<2>()).cwiseAbs().maxCoeff());
+    gap.mean = std::max(gap.mean, (dual.parameters() - z.tail<2>()).cwiseAbs().maxCoeff() / unit);
     gap.covariance = std::max(
         gap.covariance, (dual.parameterCovariance() - optimal).cwiseAbs().maxCoeff() / optimal.diagonal().maxCoeff());
   }
@@ -281,13 +285,16 @@ GapToOptimal gapToOptimal(double q, double forgetting, DualUkfOrdering ordering,
 
 // Where the parameters walk (Q_θ ≠ 0, or λ < 1), x̂_{k−1}'s error is less tied to θ_k than to θ_{k−1}: the
 // dual carries W G and P + W C Wᵀ into the time update (docs/algorithms.md §9), and is then the optimal
-// filter itself, as it is without a walk. The unscented transform is exact for a linear model, so what
-// remains is rounding: the parameter points' mean weights (α = 0.1: −99 and 25, Σ|Wmᵢ| = 199) amplify it,
-// about 199 · 100 ε ≈ 4e-12 per step, carried over the filter's memory of some hundred steps; measured
-// over 2000 steps: 1.6e-10 on θ̂ (of order 1) and 1e-10 relative on P^θ, in both forms and orderings.
+// filter itself, as it is without a walk. The unscented transform is exact for a linear model, and the
+// measured angle has no process noise of its own (a UKF measures its propagated points, which leaves Q out
+// of P_yy and P_xy where the Kalman filter has it: with Q = 1e-12 on the angle the gap is 1.6e-10, with
+// 1e-7 it is 1.6e-5, with or without a walk; redrawPointsForUpdate closes it). What remains is rounding:
+// the parameter points' mean weights (α = 0.1: −99 and 25, Σ|Wmᵢ| = 199) amplify it, about
+// 199 · 100 ε ≈ 4e-12 per step, carried over the filter's memory of some hundred steps; measured over 2000
+// steps: at most 5.4e-11 on θ̂ (of order 1) and 1.1e-10 relative on P^θ, in both forms and orderings.
 // Asserted: 1e-8. A dual that kept W and P through the walk (the code before) was off by 1.4e-4 on θ̂ and
 // 5 % on P^θ with Q_θ = 1e-6, 9e-3 and 31 % with 1e-4 (σ_θ 7 % too small), 4.6e-3 and 36 % with λ = 0.99;
-// without a walk it was the optimal filter already, and still is to the same 1.6e-10.
+// without a walk it was the optimal filter already, and still is.
 TEST(DualOptimality, WithParametersThatWalkItIsTheOptimalFilterOfTheLinearGaussianJointProblem) {
   struct Case {
     double q, forgetting;
@@ -306,6 +313,13 @@ TEST(DualOptimality, WithParametersThatWalkItIsTheOptimalFilterOfTheLinearGaussi
       EXPECT_LT(root.covariance, 1e-8);
     }
   }
+  // The same walk, Q_θ = 1e-4 (in the gains' squared units), with the gains in units of 1e-6: Q_θ =
+  // 1e-16 as entered. A walk is a walk whatever its absolute size; a test of Q_θ against Eigen's default
+  // isZero() tolerance (1e-12, absolute) took this one for none, and was off by 9e-3 and 31 %.
+  const GapToOptimal small = gapToOptimal<mjukf::FullCovariance>(1e-4, 1.0, kOrderings[0], 2000, 1e-6);
+  std::printf("Q_θ = 1e-16 I in units of 1e-6: full form %.2g, %.2g\n", small.mean, small.covariance);
+  EXPECT_LT(small.mean, 1e-8);
+  EXPECT_LT(small.covariance, 1e-8);
 }
 
 }  // namespace

@@ -450,8 +450,9 @@ void parameterStep(const Model& model, const mjukf::DualUkfSettingsFor<Model>& s
 // W_k (θ̂_k − θ̂_{k−1}), or as a Ukf started at x̂_{k−1} + W G (θ̂_k − θ̂_{k−1}) with the corrected θ̂_k
 // (UpdatedParameters, which runs the time update again). Everything differs from the library's only in the
 // order of a few hundred operations on O(1) numbers (rounding ≲ 100 ε ≈ 2e-14 per step, not compounded:
-// each step starts again from the library's values), so 1e-12 absolute. Time updates over 1 and 3 steps
-// and with a held input, λ = 0.98, Q_θ ≠ 0 and R_obs ≠ 0, with and without redrawn points.
+// each step starts again from the library's values), so 1e-12 absolute; without a walk (Q_θ = 0, λ = 1)
+// the state filter's covariance bit for bit. Time updates over 1 and 3 steps and with a held input,
+// λ = 0.98, Q_θ ≠ 0 (and both zero) and R_obs ≠ 0, with and without redrawn points.
 TEST(DualUkf, EachStepIsTheTextbookDualStepInBothOrderings) {
   using Model = Spring<2>;
   const Model model;
@@ -465,66 +466,79 @@ TEST(DualUkf, EachStepIsTheTextbookDualStepInBothOrderings) {
   base.parameterForgetting = 0.98;
   base.parameterSigmaPoints = {0.8, 2.0, 0.5};
   const double h = 0.01;
-  for (const DualUkfOrdering ordering : kOrderings) {
-    for (const bool redraw : {false, true}) {
-      SCOPED_TRACE(std::string(name(ordering)) + (redraw ? ", redrawn points" : ""));
-      auto s = base;
-      s.ordering = ordering;
-      s.redrawPointsForUpdate = redraw;
-      DualUkf<Model, mjukf::Rk4<double>> dual(model, Model::State(0.3, 0.0), Model::Param(1.2, 0.7), s);
-      Simulation<Model, mjukf::Rk4<double>> truth(model, Model::State(0.5, 0.0), Model::trueParameters(), h, 0.1, 3);
-      double moved = 0;
-      for (int k = 0; k < 300; ++k) {
-        const double t = k * h;
-        const Model::Meas y = truth.next(t);
-        const Model::State x = dual.state();
-        const Eigen::Matrix2d P = dual.covariance();
-        const Model::Param theta = dual.parameters();
-        const Eigen::Matrix2d W = dual.sensitivity();
-        Eigen::Matrix2d Ptheta = dual.parameterCovariance();
-        const int steps = k % 3 == 1 ? 3 : 1;
-        const bool held = k % 3 == 2;
-        const Model::Input u(0.25);
-        ASSERT_EQ(held ? dual.timeUpdate(t, h, u, steps) : dual.timeUpdate(t, h, steps), Status::Ok) << k;
-        ASSERT_EQ(dual.measurementUpdate(y), Status::Ok) << k;
-
-        const Eigen::Matrix2d predicted = Ptheta / s.parameterForgetting + s.parameterProcessNoise;
-        const Eigen::Matrix2d G = Ptheta * predicted.inverse();
-        const Eigen::Matrix2d C = Ptheta - Ptheta * predicted.inverse() * Ptheta;
-        const Eigen::Matrix2d startSensitivity = W * G;
-        auto us = stateSettings(s);
-        us.initialCovariance = P + W * C * W.transpose();
-        us.initialCovariance = 0.5 * (us.initialCovariance + us.initialCovariance.transpose()).eval();
-        mjukf::Ukf<Model, mjukf::Rk4<double>> prior(model, x, theta, us);
-        ASSERT_EQ(held ? prior.timeUpdate(t, h, u, steps) : prior.timeUpdate(t, h, steps), Status::Ok);
-        ASSERT_EQ(prior.measurementUpdate(y), Status::Ok);
-
-        Model::Param thetaNext;
-        parameterStep<Model, mjukf::Rk4<double>>(
-            model, s, x, startSensitivity, theta, Ptheta, thetaNext,
-            [&](double time) { return held ? u : model.input(time); }, t, h, steps, y,
-            prior.lastUpdate().innovationCovariance);
-        ASSERT_LT((dual.parameters() - thetaNext).cwiseAbs().maxCoeff(), 1e-12) << "step " << k;
-        ASSERT_LT((dual.parameterCovariance() - Ptheta).cwiseAbs().maxCoeff(), 1e-12) << "step " << k;
-
-        const Model::Param moveOfTheta = dual.parameters() - theta;
-        if (ordering == DualUkfOrdering::PriorParameters) {
-          ASSERT_LT((dual.covariance() - prior.covariance()).cwiseAbs().maxCoeff(), 1e-12) << "step " << k;
-          const Model::State expected = prior.state() + dual.sensitivity() * moveOfTheta;
-          ASSERT_LT((dual.state() - expected).cwiseAbs().maxCoeff(), 1e-12) << "step " << k;
-        } else {
-          mjukf::Ukf<Model, mjukf::Rk4<double>> again(model, Model::State(x + startSensitivity * moveOfTheta),
-                                                      dual.parameters(), us);
-          ASSERT_EQ(held ? again.timeUpdate(t, h, u, steps) : again.timeUpdate(t, h, steps), Status::Ok);
-          ASSERT_EQ(again.measurementUpdate(y), Status::Ok);
-          ASSERT_LT((dual.covariance() - again.covariance()).cwiseAbs().maxCoeff(), 1e-12) << "step " << k;
-          ASSERT_LT((dual.state() - again.state()).cwiseAbs().maxCoeff(), 1e-12) << "step " << k;
+  for (const bool walking : {true, false})
+    for (const DualUkfOrdering ordering : kOrderings) {
+      for (const bool redraw : {false, true}) {
+        SCOPED_TRACE(std::string(name(ordering)) + (redraw ? ", redrawn points" : "") + (walking ? "" : ", no walk"));
+        auto s = base;
+        s.ordering = ordering;
+        s.redrawPointsForUpdate = redraw;
+        if (!walking) {
+          s.parameterProcessNoise.setZero();
+          s.parameterForgetting = 1;
         }
-        moved = std::max(moved, (dual.parameters() - theta).cwiseAbs().maxCoeff());
+        // Without a walk the state filter's prior is P's own factor: its covariance must then be the Ukf's
+        // bit for bit (it shares the dual's code path and factors the same exactly symmetric P).
+        const auto sameCovariance = [&](const Eigen::Matrix2d& a, const Eigen::Matrix2d& b) {
+          return walking ? (a - b).cwiseAbs().maxCoeff() < 1e-12 : bitwiseSame(a, b);
+        };
+        DualUkf<Model, mjukf::Rk4<double>> dual(model, Model::State(0.3, 0.0), Model::Param(1.2, 0.7), s);
+        Simulation<Model, mjukf::Rk4<double>> truth(model, Model::State(0.5, 0.0), Model::trueParameters(), h, 0.1, 3);
+        double moved = 0;
+        for (int k = 0; k < 300; ++k) {
+          const double t = k * h;
+          const Model::Meas y = truth.next(t);
+          const Model::State x = dual.state();
+          const Eigen::Matrix2d P = dual.covariance();
+          const Model::Param theta = dual.parameters();
+          const Eigen::Matrix2d W = dual.sensitivity();
+          Eigen::Matrix2d Ptheta = dual.parameterCovariance();
+          const int steps = k % 3 == 1 ? 3 : 1;
+          const bool held = k % 3 == 2;
+          const Model::Input u(0.25);
+          ASSERT_EQ(held ? dual.timeUpdate(t, h, u, steps) : dual.timeUpdate(t, h, steps), Status::Ok) << k;
+          ASSERT_EQ(dual.measurementUpdate(y), Status::Ok) << k;
+
+          const Eigen::Matrix2d predicted = Ptheta / s.parameterForgetting + s.parameterProcessNoise;
+          const Eigen::Matrix2d G = Ptheta * predicted.inverse();
+          const Eigen::Matrix2d C = Ptheta - Ptheta * predicted.inverse() * Ptheta;
+          const Eigen::Matrix2d startSensitivity = walking ? Eigen::Matrix2d(W * G) : W;
+          auto us = stateSettings(s);
+          us.initialCovariance = P;
+          if (walking) {
+            us.initialCovariance += W * C * W.transpose();
+            us.initialCovariance = 0.5 * (us.initialCovariance + us.initialCovariance.transpose()).eval();
+          }
+          mjukf::Ukf<Model, mjukf::Rk4<double>> prior(model, x, theta, us);
+          ASSERT_EQ(held ? prior.timeUpdate(t, h, u, steps) : prior.timeUpdate(t, h, steps), Status::Ok);
+          ASSERT_EQ(prior.measurementUpdate(y), Status::Ok);
+
+          Model::Param thetaNext;
+          parameterStep<Model, mjukf::Rk4<double>>(
+              model, s, x, startSensitivity, theta, Ptheta, thetaNext,
+              [&](double time) { return held ? u : model.input(time); }, t, h, steps, y,
+              prior.lastUpdate().innovationCovariance);
+          ASSERT_LT((dual.parameters() - thetaNext).cwiseAbs().maxCoeff(), 1e-12) << "step " << k;
+          ASSERT_LT((dual.parameterCovariance() - Ptheta).cwiseAbs().maxCoeff(), 1e-12) << "step " << k;
+
+          const Model::Param moveOfTheta = dual.parameters() - theta;
+          if (ordering == DualUkfOrdering::PriorParameters) {
+            ASSERT_TRUE(sameCovariance(dual.covariance(), prior.covariance())) << "step " << k;
+            const Model::State expected = prior.state() + dual.sensitivity() * moveOfTheta;
+            ASSERT_LT((dual.state() - expected).cwiseAbs().maxCoeff(), 1e-12) << "step " << k;
+          } else {
+            mjukf::Ukf<Model, mjukf::Rk4<double>> again(model, Model::State(x + startSensitivity * moveOfTheta),
+                                                        dual.parameters(), us);
+            ASSERT_EQ(held ? again.timeUpdate(t, h, u, steps) : again.timeUpdate(t, h, steps), Status::Ok);
+            ASSERT_EQ(again.measurementUpdate(y), Status::Ok);
+            ASSERT_TRUE(sameCovariance(dual.covariance(), again.covariance())) << "step " << k;
+            ASSERT_LT((dual.state() - again.state()).cwiseAbs().maxCoeff(), 1e-12) << "step " << k;
+          }
+          moved = std::max(moved, (dual.parameters() - theta).cwiseAbs().maxCoeff());
+        }
+        EXPECT_GT(moved, 1e-3) << "the parameters never moved: the test would not see a wrong θ";
       }
-      EXPECT_GT(moved, 1e-3) << "the parameters never moved: the test would not see a wrong θ";
     }
-  }
 }
 
 // The orderings are different algorithms where θ enters the dynamics. Their first correction of θ is

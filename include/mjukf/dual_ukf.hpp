@@ -71,8 +71,9 @@ namespace detail {
 /// The parameter policy of `DualUkf` (docs/algorithms.md §9): a second unscented estimate, of θ, with a
 /// random-walk time update, whose sigma points θⱼ are measured through the state filter's prediction
 /// from the state the filter would hold had θ been θⱼ all along,
-///     Dⱼ = g(Φ_h(x̂_{k−1} + W (θⱼ − θ̂); θⱼ), u, θⱼ),   W = ∂x̂/∂θ̂ (the recurrent sensitivity),
-/// observed with the state filter's innovation covariance H P⁻ Hᵀ + R. Its measurement update corrects
+///     Dⱼ = g(Φ_h(x̂_{k−1} + W_G (θⱼ − θ̂); θⱼ), u, θⱼ),   W = ∂x̂/∂θ̂ (the recurrent sensitivity),
+/// W_G = W G where the parameters walk (startFromWalk), observed with the state filter's innovation
+/// covariance H P⁻ Hᵀ + R. Its measurement update corrects
 /// the parameters first, then the state (with the UpdatedParameters ordering, after predicting the
 /// state's last step again with the corrected θ̂); the engine commits both or neither.
 /// detail/unscented_engine.hpp §3 lists what a policy supplies.
@@ -97,7 +98,7 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
                   s.measurementNoise + s.parameterObservationNoise),
         boundsActive_(s.parameterBounds.active()),
         storesStep_(s.ordering == DualUkfOrdering::UpdatedParameters),
-        walks_(s.parameterForgetting != Scalar(1) || !s.parameterProcessNoise.isZero()) {
+        walks_(s.parameterForgetting != Scalar(1) || !s.parameterProcessNoise.isZero(Scalar(0))) {
     estimate_.assign(initialParameters, s.initialParameterCovariance);  // checked in validate()
   }
 
@@ -306,7 +307,7 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
       if (const Status st = pe.draw(pe.mean(), pe.factor()); st != Status::Ok) return st;
     const auto& thetas = drawn ? pe.workPoints() : pe.points();
     const Param& center = pe.mean();          // θ̂⁻ after a time update: the θⱼ were drawn about it
-    for (int j = 0; j < ParameterCount; ++j)  // Dⱼ = g(Φ_h(x̂_{k−1} + W (θⱼ − θ̂); θⱼ), u, θⱼ)
+    for (int j = 0; j < ParameterCount; ++j)  // Dⱼ = g(Φ_h(x̂_{k−1} + W_G (θⱼ − θ̂); θⱼ), u, θⱼ)
       pe.measuredPoints().col(j) = measureModel(
           model,
           drawn ? State(engine.state() + sensitivity_ * (thetas.col(j) - center)) : State(propagatedStates_.col(j)), u,
@@ -325,7 +326,8 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
   }
 
   // The UpdatedParameters ordering: the state's last time update again, through the engine's own
-  // prediction, from x̂_{k−1} and the factor of P_{k−1}, with θ̂_k, into repredictedMean_ and
+  // prediction, from x̂_{k−1} (moved by W_G Δθ̂) and the factor it drew from (P_{k−1}'s, or that of
+  // P_{k−1} + W C Wᵀ where the parameters walk), with θ̂_k, into repredictedMean_ and
   // repredictedCovariance_ and the engine's work points.
   template <class Engine>
   Status predictStateAgain(Engine& engine) {
@@ -360,12 +362,13 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
     return engine.predict(step, shiftedPriorMean(), priorFactor_);
   }
 
-  // The random walk θ_k = θ_{k−1} + η (with forgetting, cov(η) = N = P^θ (1/λ − 1) + Q_θ) leaves x_{k−1}
-  // less tied to θ_k than to θ_{k−1} (docs/algorithms.md §9): given θ_k, θ_{k−1} ~ N(θ̂ + G (θ_k − θ̂), C)
-  // with G = P^θ (P^θ⁻)⁻¹ and C = G N, so x_{k−1} | θ_k ~ N(x̂ + W G (θ_k − θ̂), P + W C Wᵀ). Into the
-  // candidates: W_G = W G, and the factor of P + W C Wᵀ the state's time update draws from. Exact for a
-  // plant linear in x and θ (tests/dual_consistency_test.cpp); W C Wᵀ is the state's error the walk
-  // adds, which a filter that keeps W G alone and P would leave out (σ_θ too small).
+  // The random walk θ_k = θ_{k−1} + η (with forgetting, cov(η) = N = P^θ (1 − λ) / λ + Q_θ) leaves
+  // x_{k−1} less tied to θ_k than to θ_{k−1} (docs/algorithms.md §9): given θ_k, θ_{k−1} ~
+  // N(θ̂ + G (θ_k − θ̂), C) with G = P^θ (P^θ⁻)⁻¹ and C = P^θ − G P^θ = G N, so x_{k−1} | θ_k ~
+  // N(x̂ + W G (θ_k − θ̂), P + W C Wᵀ). Into the candidates: W_G = W G, and the factor of P + W C Wᵀ the
+  // state's time update draws from, as P's factor updated by the p columns of W L_C (L_C Lᵀ_C = C): no
+  // n × n sum is formed and factored again, so a P far smaller than W C Wᵀ in some direction keeps its
+  // factor there. Exact for a plant linear in x and θ (tests/dual_consistency_test.cpp).
   Status startFromWalk(const Settings& s, const Est& state) {
     const ParameterEstimate& pe = estimate_;
     using ParamMatrix = Eigen::Matrix<Scalar, ParamDim, ParamDim>;
@@ -373,16 +376,23 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
     solveLowerInPlace(pe.candidateFactor(), gainTransposed);
     solveUpperInPlace(pe.candidateFactor(), gainTransposed);
     candidateStartSensitivity_.noalias() = sensitivity_ * gainTransposed.transpose();
-    // N from the settings rather than as P^θ⁻ − P^θ, which cancels where the walk is small against P^θ.
-    const ParamMatrix walk =
-        pe.covariance() * (Scalar(1) / s.parameterForgetting - Scalar(1)) + s.parameterProcessNoise;
-    ParamMatrix kept;  // C = G N, symmetric positive semi-definite (= (P^θ⁻¹ + N⁻¹)⁻¹ where both exist)
-    kept.noalias() = gainTransposed.transpose() * walk;
+    // N from the settings rather than as P^θ⁻ − P^θ, which cancels where the walk is small against P^θ;
+    // (1 − λ) / λ rather than 1/λ − 1, whose subtraction rounds.
+    const Scalar forgetting = s.parameterForgetting;
+    const ParamMatrix walk = pe.covariance() * ((Scalar(1) - forgetting) / forgetting) + s.parameterProcessNoise;
+    // C in Joseph's form, (I − G) P^θ (I − G)ᵀ + G N Gᵀ: a sum of two semi-definite terms whatever G is
+    // (a repaired P^θ⁻ changes G but not N), so its factor exists; psdSquareRoot takes a singular C too.
+    const ParamMatrix rest = ParamMatrix::Identity() - gainTransposed.transpose();
+    ParamMatrix kept = rest * pe.covariance() * rest.transpose();
+    kept.noalias() += gainTransposed.transpose() * walk * gainTransposed;
     symmetrize(kept);
-    StateMatrix widened = state.covariance();
-    widened.noalias() += sensitivity_ * kept * sensitivity_.transpose();
-    symmetrize(widened);
-    if (!choleskyLower(widened, candidatePriorFactor_)) return Status::NotPositiveDefinite;
+    const Sensitivity spread = sensitivity_ * psdSquareRoot(kept);  // W L_C
+    if (!allFinite(spread)) return Status::NonFiniteResult;
+    candidatePriorFactor_ = state.factor();
+    // Nothing to add (W = 0, as at the start and after a reset, or C = 0): P's factor as it is, bit for
+    // bit, where a rotation by a zero column would still round its diagonal.
+    if (spread.isZero(Scalar(0))) return Status::Ok;
+    if (!choleskyRankUpdate(candidatePriorFactor_, spread, Scalar(1))) return Status::NonFiniteResult;
     return Status::Ok;
   }
 
@@ -412,7 +422,7 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
   bool storesStep_;  // the UpdatedParameters ordering
   bool walks_;       // P^θ⁻ ≠ P^θ: Q_θ ≠ 0 or λ < 1 (startFromWalk)
   MeasurementGate<Scalar, MeasDim> noGate_;
-  PropagatedStates propagatedStates_ = PropagatedStates::Zero();  // Φ_h(x̂_{k−1} + W Δθⱼ; θⱼ), last time update
+  PropagatedStates propagatedStates_ = PropagatedStates::Zero();  // Φ_h(x̂_{k−1} + W_G Δθⱼ; θⱼ), last time update
   Sensitivity sensitivity_ = Sensitivity::Zero();                 // W = ∂x̂/∂θ̂ after the last correction
   Sensitivity predictedSensitivity_ = Sensitivity::Zero();        // W⁻ of the last time update
   Scalar openLoopTime_ = 0;                                       // open-loop propagation since the last time update
@@ -445,8 +455,8 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
 
 /// Dual unscented Kalman filter: a UKF of the state x run with the current parameter estimate θ̂, and a
 /// UKF of θ (a random walk) that observes the measurement through the state filter's prediction:
-/// its sigma points θⱼ are measured as Dⱼ = g(Φ_h(x̂_{k−1}; t, θⱼ), θⱼ). The cross-covariance of x and
-/// θ is not estimated.
+/// its sigma points θⱼ are measured as Dⱼ = g(Φ_h(x̂_{k−1} + W_G (θⱼ − θ̂); t, θⱼ), θⱼ) (docs/algorithms.md
+/// §9). The cross-covariance of x and θ is not estimated; W = ∂x̂/∂θ̂ carries the dependence instead.
 ///
 /// A time update predicts both filters (the parameter filter's 2p + 1 propagations of x̂_{k−1} are done
 /// here, where the input is known); a measurement update corrects both with R, and commits both or
@@ -519,7 +529,8 @@ class DualUkf : public detail::EngineOf<
   const ParamMatrix& parameterCovariance() const { return this->policy_.estimate().covariance(); }
   /// W = ∂x̂/∂θ̂ (n × p), the sensitivity of the state estimate to the parameters through the dynamics and
   /// the state's corrections, after the last measurement update: the parameter filter propagates
-  /// x̂ + W (θⱼ − θ̂) with each of its θⱼ.
+  /// x̂ + W (θⱼ − θ̂) with each of its θⱼ (x̂ + W G (θⱼ − θ̂) where the parameters walk, docs/algorithms.md
+  /// §9).
   const Eigen::Matrix<Scalar, Engine::StateDim, Engine::ParamDim>& sensitivity() const {
     return this->policy_.sensitivity();
   }
