@@ -73,9 +73,9 @@ namespace detail {
 /// from the state the filter would hold had θ been θⱼ all along,
 ///     Dⱼ = g(Φ_h(x̂_{k−1} + W_G (θⱼ − θ̂); θⱼ), u, θⱼ),   W = ∂x̂/∂θ̂ (the recurrent sensitivity),
 /// W_G = W G where the parameters walk (startFromWalk), observed with the state filter's innovation
-/// covariance H P⁻ Hᵀ + R. Its measurement update corrects
-/// the parameters first, then the state (with the UpdatedParameters ordering, after predicting the
-/// state's last step again with the corrected θ̂); the engine commits both or neither.
+/// covariance H P⁻ Hᵀ + R. Its measurement update corrects the parameters first, then the state (with
+/// the UpdatedParameters ordering, after predicting the state's last step again with the corrected θ̂);
+/// the engine commits both or neither.
 /// detail/unscented_engine.hpp §3 lists what a policy supplies.
 template <class Model, class Integrator, class Settings, class Est>
 class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> {
