@@ -22,7 +22,8 @@ namespace {
 
 // A motor's speed and angle in discrete time, driven by two inputs whose gains θ₁ > 0 and θ₂ < 0 are
 // unknown: ω' = a ω + θ₁ u₁ + θ₂ u₂ + w, φ' = φ + dt ω; only the angle is measured, y = φ + v. Linear in
-// (x, θ) jointly, with one output and two parameters of opposite-sign sensitivity.
+// (x, θ) jointly, with one output and two parameters of opposite-sign sensitivity. `unit` lets a test
+// give θ in other units (θ = 1e-6 is a gain of 1 when unit = 1e-6); dividing by 1 is exact.
 struct AngleOnlyMotor {
   using Scalar = double;
   static constexpr int StateDim = 2, ParamDim = 2, MeasDim = 1, InputDim = 2;
@@ -31,8 +32,9 @@ struct AngleOnlyMotor {
   using Meas = Eigen::Matrix<double, 1, 1>;
   using Input = Eigen::Matrix<double, 2, 1>;
   static constexpr double kSpeedDecay = 0.95, kStep = 0.01;
+  double unit = 1;
   State transition(double, double dt, const State& x, const Input& u, const Param& theta) const {
-    return State(x(0) + dt * x(1), kSpeedDecay * x(1) + theta.dot(u));
+    return State(x(0) + dt * x(1), kSpeedDecay * x(1) + theta.dot(u) / unit);
   }
   Meas measurement(const State& x, const Param&) const { return Meas(x(0)); }
   static Input input(int k) {  // two square waves of different periods: both gains are identifiable
@@ -192,26 +194,10 @@ const char* name(DualUkfOrdering ordering) {
   return ordering == DualUkfOrdering::PriorParameters ? "PriorParameters" : "UpdatedParameters";
 }
 
-// A motor's speed and angle in discrete time whose two input gains θ walk: θ_k = θ_{k−1} + η,
-// ω_k = 0.95 ω_{k−1} + θ_k · u_k + w, φ_k = φ_{k−1} + dt ω_{k−1}, y = φ + v. Linear in (x, θ) jointly, so
-// the optimal filter of [x; θ] is the Kalman filter of the augmented vector, whose transition carries the
-// walk into ω through u (the walk comes first, as the dual's parameter time update does).
-struct WalkingGainsMotor {
-  using Scalar = double;
-  static constexpr int StateDim = 2, ParamDim = 2, MeasDim = 1, InputDim = 2;
-  using State = Eigen::Matrix<double, 2, 1>;
-  using Param = Eigen::Matrix<double, 2, 1>;
-  using Meas = Eigen::Matrix<double, 1, 1>;
-  using Input = Eigen::Matrix<double, 2, 1>;
-  static constexpr double kDecay = 0.95, kStep = 0.01;
-  double unit = 1;  // θ is given in this unit: θ = 1e-6 is a gain of 1 when unit = 1e-6
-  State transition(double, double dt, const State& x, const Input& u, const Param& theta) const {
-    return State(x(0) + dt * x(1), kDecay * x(1) + theta.dot(u) / unit);
-  }
-  Meas measurement(const State& x, const Param&) const { return Meas(x(0)); }
-  static Input input(int k) { return Input((k / 40) % 2 ? 1.0 : -1.0, (k / 70) % 2 ? 0.5 : 1.0); }
-};
-
+// AngleOnlyMotor with its two gains walking, θ_k = θ_{k−1} + η, applied before the transition that uses
+// θ_k: linear in (x, θ) jointly, so the optimal filter of [x; θ] is the Kalman filter of the augmented
+// vector, whose transition carries the walk into ω through u (the walk comes first, as the dual's parameter
+// time update does).
 // The worst gaps between a DualUkf and the augmented Kalman filter over one run of `steps` steps, with the
 // parameters' random walk Q_θ = q I and forgetting λ, θ in units of `unit`: |θ̂ − θ̂_KF| / unit and
 // |P^θ − P^θ_KF| / max diag P^θ_KF.
@@ -220,7 +206,7 @@ struct GapToOptimal {
 };
 template <class Form>
 GapToOptimal gapToOptimal(double q, double forgetting, DualUkfOrdering ordering, int steps, double unit = 1) {
-  using Model = WalkingGainsMotor;
+  using Model = AngleOnlyMotor;
   using Filter = mjukf::DualUkf<Model, mjukf::DefaultIntegrator<Model>, mjukf::MerweScaled, Form>;
   constexpr double speedNoise = 0.05, angleNoise = 0.002;
   typename Filter::Settings s;
@@ -256,7 +242,7 @@ GapToOptimal gapToOptimal(double q, double forgetting, DualUkfOrdering ordering,
     // θ_k = θ_{k−1} + η with cov(η) = N = P^θθ (1 − λ) / λ + Q_θ (forgetting as a walk), then x_k with θ_k.
     Eigen::Matrix4d A = Eigen::Matrix4d::Identity();
     A(0, 1) = Model::kStep;
-    A(1, 1) = Model::kDecay;
+    A(1, 1) = Model::kSpeedDecay;
     A(1, 2) = u(0) / unit;
     A(1, 3) = u(1) / unit;
     Eigen::Matrix<double, 4, 2> walkInto = Eigen::Matrix<double, 4, 2>::Zero();  // where η enters [x; θ]

@@ -466,7 +466,7 @@ TEST(DualUkf, EachStepIsTheTextbookDualStepInBothOrderings) {
   base.parameterForgetting = 0.98;
   base.parameterSigmaPoints = {0.8, 2.0, 0.5};
   const double h = 0.01;
-  for (const bool walking : {true, false})
+  for (const bool walking : {true, false}) {
     for (const DualUkfOrdering ordering : kOrderings) {
       for (const bool redraw : {false, true}) {
         SCOPED_TRACE(std::string(name(ordering)) + (redraw ? ", redrawn points" : "") + (walking ? "" : ", no walk"));
@@ -539,6 +539,7 @@ TEST(DualUkf, EachStepIsTheTextbookDualStepInBothOrderings) {
         EXPECT_GT(moved, 1e-3) << "the parameters never moved: the test would not see a wrong θ";
       }
     }
+  }
 }
 
 // The orderings are different algorithms where θ enters the dynamics. Their first correction of θ is
