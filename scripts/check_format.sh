@@ -5,7 +5,8 @@
 # The sources are the *.hpp and *.cpp files under include/, examples/, tests/ and bench/ that git tracks
 # (every such file when the directory is not a git work tree). Prints each file that is not formatted,
 # with the number of places clang-format would change, and exits 1 if there is one; exits 77 (ctest:
-# skipped) when clang-format 14 is not installed. `clang-format -i <file>` formats a file in place.
+# skipped) when clang-format 14 is not installed, or 1 if MJUKF_REQUIRE_CLANG_FORMAT=1.
+# `clang-format -i <file>` formats a file in place.
 # tests/format runs it under ctest (format_check). CLANG_FORMAT names another binary of version 14.
 set -euo pipefail
 root=$(cd "${1:-$(dirname "$0")/..}" && pwd -P)
@@ -25,6 +26,8 @@ fi
 if [ -z "$tool" ] || ! version14 "$tool"; then
   echo "check_format: clang-format 14 not found (Debian 12: apt-get install clang-format, which" \
     "scripts/setup.sh does); not checked" >&2
+  # scripts/test.sh sets MJUKF_REQUIRE_CLANG_FORMAT=1: after its setup a missing formatter is an error.
+  [ "${MJUKF_REQUIRE_CLANG_FORMAT:-0}" = 1 ] && exit 1
   exit 77
 fi
 [ -f .clang-format ] || { echo "check_format: no .clang-format in $root" >&2; exit 1; }
