@@ -4,6 +4,7 @@
 // are rounding bounds: a few ε times the size of the problem and of its entries.
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
 
@@ -72,6 +73,47 @@ TEST(LinearAlgebra, TriangularSolvesInvertTheFactor) {
   EXPECT_LT((u * s.transpose() - c).cwiseAbs().maxCoeff(), 100 * kEps);
 }
 
+// smallLu writes out the algorithm Eigen's PartialPivLU runs up to 16 × 16: the same pivots and the same
+// factors to the bit, ties between pivot candidates, exactly zero pivots and NaN included.
+template <int N>
+void expectEigensLu(const Eigen::Matrix<double, N, N>& m, const char* what) {
+  const auto mine = mjukf::detail::smallLu(m);
+  const Eigen::PartialPivLU<Eigen::Matrix<double, N, N>> eigens(m);
+  // Transpositions P (row k swapped with row t(k), in turn): what smallLu stores.
+  const Eigen::Transpositions<N, N, int> swaps(mine.rowSwaps);
+  Eigen::PermutationMatrix<N, N, int> p;
+  p = swaps;
+  EXPECT_EQ(p.indices(), eigens.permutationP().indices()) << what;
+  for (int j = 0; j < N; ++j)
+    for (int i = 0; i < N; ++i) {
+      const double a = mine.lu(i, j), b = eigens.matrixLU()(i, j);
+      EXPECT_TRUE(std::memcmp(&a, &b, sizeof a) == 0) << what << " (" << i << ", " << j << "): " << a << " vs " << b;
+    }
+}
+
+TEST(LinearAlgebra, SmallLuIsEigensPartialPivLuBitForBit) {
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> normal;
+  Eigen::Matrix<double, 6, 6> random;
+  for (double& v : random.reshaped()) v = normal(rng);
+  expectEigensLu<6>(random, "random 6 x 6");
+  Eigen::Matrix<double, 16, 16> large;  // the bound: Eigen's last unblocked size
+  for (double& v : large.reshaped()) v = normal(rng);
+  expectEigensLu<16>(large, "random 16 x 16");
+  Eigen::Matrix4d ties;  // equal candidates in size: the first one is the pivot
+  ties << 1, 2, 0, 1, -1, 0, 3, 2, 1, -2, 1, 0, 0, 1, 1, 1;
+  expectEigensLu<4>(ties, "ties");
+  Eigen::Matrix4d zeroColumn = ties;  // an exactly zero pivot: left in place, the rest factored
+  zeroColumn.col(1).setZero();
+  expectEigensLu<4>(zeroColumn, "zero pivot");
+  Eigen::Matrix4d rankOne = Eigen::Vector4d(1, -2, 3, 0.5) * Eigen::RowVector4d(2, 1, -1, 4);
+  expectEigensLu<4>(rankOne, "rank one");
+  Eigen::Matrix4d withNan = ties;
+  withNan(2, 1) = std::numeric_limits<double>::quiet_NaN();
+  expectEigensLu<4>(withNan, "NaN");
+  expectEigensLu<1>(Eigen::Matrix<double, 1, 1>(-3.0), "1 x 1");
+}
+
 // The MJUKF's θ̂ covariance solves A M = C through M's partial-pivoting LU. Backward stable (Higham,
 // Accuracy and Stability of Numerical Algorithms, Thm 9.4): (M + ΔM) X = B with |ΔM| ≤ γ₃ₙ Pᵀ|L||U|,
 // so |M X − B| ≤ γ₃ₙ Pᵀ|L||U| |X|; a permuted M makes the pivoting matter.
@@ -85,17 +127,19 @@ TEST(LinearAlgebra, LuSolveIsBackwardStable) {
     for (double& v : m.reshaped()) v = normal(rng);
     for (double& v : b.reshaped()) v = normal(rng);
     m.row(0).swap(m.row(N - 1));
-    const Eigen::PartialPivLU<Eigen::Matrix<double, N, N>> lu(m);
+    const auto lu = mjukf::detail::smallLu(m);
     Eigen::Matrix<double, N, 3> x = b;
     mjukf::detail::luSolveInPlace(lu, x);
-    const Eigen::Matrix<double, N, N> lower = lu.matrixLU().template triangularView<Eigen::UnitLower>();
-    const Eigen::Matrix<double, N, N> upper = lu.matrixLU().template triangularView<Eigen::Upper>();
+    const Eigen::Matrix<double, N, N> lower = lu.lu.template triangularView<Eigen::UnitLower>();
+    const Eigen::Matrix<double, N, N> upper = lu.lu.template triangularView<Eigen::Upper>();
+    Eigen::PermutationMatrix<N, N, int> p;
+    p = Eigen::Transpositions<N, N, int>(lu.rowSwaps);
     // The residual in long double, so that its own rounding does not count against the bound.
     using Wide = Eigen::Matrix<long double, N, 3>;
     const Wide residual = (m.cast<long double>() * x.cast<long double>() - b.cast<long double>()).cwiseAbs();
     const double gamma = 3 * N * kEps / (1 - 3 * N * kEps);
     const Eigen::Matrix<double, N, 3> bound =
-        gamma * (lu.permutationP().transpose() * (lower.cwiseAbs() * upper.cwiseAbs())) * x.cwiseAbs();
+        gamma * (p.transpose() * (lower.cwiseAbs() * upper.cwiseAbs())) * x.cwiseAbs();
     EXPECT_TRUE((residual.array() <= bound.cast<long double>().array()).all()) << trial;
   }
 }

@@ -1,13 +1,13 @@
 #pragma once
 
 // The small linear algebra of a filter step, in one place: the finiteness check, the Cholesky factor
-// and triangular solves, the symmetrisation of a covariance, the weighted moments of a point set (the
-// unscented transform, docs/algorithms.md §1–3), the symmetric sigma-point draw, and the square-root
-// factors of the square-root form (docs/algorithms.md §10: Householder factors of B Bᵀ and AᵀA, rank-one
-// updates and downdates of a Cholesky factor, a square root of a semi-definite matrix), and the positive
-// semi-definite part of a symmetric matrix (the MJUKF's floor of P⁻, §5.2). Every function
-// takes fixed-size Eigen matrices, writes into its arguments and allocates nothing; each is written out
-// where Eigen's general path costs more than the arithmetic at these sizes (said at each).
+// and triangular solves, LU with partial pivoting, the symmetrisation of a covariance, the weighted
+// moments of a point set (the unscented transform, docs/algorithms.md §1–3), the symmetric sigma-point
+// draw, and the square-root factors of the square-root form (docs/algorithms.md §10: Householder factors
+// of B Bᵀ and AᵀA, rank-one updates and downdates of a Cholesky factor, a square root of a semi-definite
+// matrix), and the positive semi-definite part of a symmetric matrix (the MJUKF's floor of P⁻, §5.2).
+// Every function takes fixed-size Eigen matrices, writes into its arguments and allocates nothing; each is
+// written out where Eigen's general path costs more than the arithmetic at these sizes (said at each).
 
 #include <algorithm>
 #include <cmath>
@@ -19,6 +19,7 @@
 #include <Eigen/Core>
 #include <Eigen/Eigenvalues>
 #include <Eigen/Jacobi>
+#include <Eigen/LU>
 
 namespace mjukf::detail {
 
@@ -213,20 +214,83 @@ bool isLowerTriangular(const Matrix& m) {
   return true;
 }
 
-// B ← M⁻¹ B for the M whose PartialPivLU is `lu` (P M = L U, L unit lower and U both in matrixLU()), by
-// substitution a row at a time. Eigen's own solve with a matrix right-hand side takes the blocked
-// level-3 path, whose workspace fallback links malloc and free into a firmware image.
+// LU with partial pivoting, P M = L U, for a fixed-size square M up to 16 × 16: Eigen's unblocked
+// algorithm, which its PartialPivLU runs at these sizes (the same pivots, the same bits), written out as
+// plain loops. Eigen's class also compiles its blocked path for larger matrices, a triangular solve and a
+// general product on dynamic blocks; a unit with the MJUKF's covariance of θ̂ spent about a second on it.
+inline constexpr int kUnblockedLuBound = 16;  // Eigen's UnBlockedBound (LU/PartialPivLU.h)
+
+template <class Matrix>
+struct SmallLu {
+  static constexpr int kSize = Matrix::RowsAtCompileTime;
+  Matrix lu;                              // L below the diagonal (its unit diagonal implied), U on and above
+  Eigen::Matrix<int, kSize, 1> rowSwaps;  // row k swapped with row rowSwaps(k), for k = 0, 1, … in turn
+};
+
+template <class Derived>
+SmallLu<typename Derived::PlainObject> smallLu(const Eigen::MatrixBase<Derived>& m) {
+  using Matrix = typename Derived::PlainObject;
+  using Scalar = typename Matrix::Scalar;
+  constexpr int n = Matrix::RowsAtCompileTime;
+  static_assert(n != Eigen::Dynamic && n == Matrix::ColsAtCompileTime && n <= kUnblockedLuBound,
+                "smallLu: a fixed-size square matrix up to kUnblockedLuBound");
+  SmallLu<Matrix> f{m, {}};
+  Matrix& a = f.lu;
+  for (int k = 0; k < n; ++k) {
+    // The first row of largest |a(i, k)|, i ≥ k (Eigen's maxCoeff: strictly larger replaces).
+    int pivot = k;
+    Scalar largest = std::abs(a(k, k));
+    for (int i = k + 1; i < n; ++i)
+      if (std::abs(a(i, k)) > largest) {
+        largest = std::abs(a(i, k));
+        pivot = i;
+      }
+    f.rowSwaps(k) = pivot;
+    if (largest != Scalar(0)) {  // a zero column is left as it is, as Eigen does: U is then singular
+      if (pivot != k) a.row(k).swap(a.row(pivot));
+      for (int i = k + 1; i < n; ++i) a(i, k) /= a(k, k);
+    }
+    for (int j = k + 1; j < n; ++j)
+      for (int i = k + 1; i < n; ++i) a(i, j) -= a(i, k) * a(k, j);
+  }
+  return f;
+}
+
+// B ← U⁻¹ L⁻¹ B for the unit lower L and upper U stored together in `lu`, by substitution a row at a time.
+template <class Factors, class Rhs>
+void substituteLuInPlace(const Factors& lu, Rhs& b) {
+  const int n = int(lu.rows());
+  for (int i = 1; i < n; ++i)
+    for (int k = 0; k < i; ++k) b.row(i) -= lu(i, k) * b.row(k);
+  for (int i = n - 1; i >= 0; --i) {
+    for (int k = i + 1; k < n; ++k) b.row(i) -= lu(i, k) * b.row(k);
+    b.row(i) /= lu(i, i);
+  }
+}
+
+// B ← M⁻¹ B for the M factored by `lu`: SmallLu, or (above its bound) Eigen's PartialPivLU, whose own
+// solve with a matrix right-hand side takes the blocked level-3 path, whose workspace fallback links
+// malloc and free into a firmware image.
+template <class Matrix, class Rhs>
+void luSolveInPlace(const SmallLu<Matrix>& lu, Rhs& b) {
+  for (int k = 0; k < SmallLu<Matrix>::kSize; ++k)
+    if (lu.rowSwaps(k) != k) b.row(k).swap(b.row(lu.rowSwaps(k)));
+  substituteLuInPlace(lu.lu, b);
+}
 template <class Lu, class Rhs>
 void luSolveInPlace(const Lu& lu, Rhs& b) {
   b = lu.permutationP() * b;
-  const auto& m = lu.matrixLU();
-  const int n = int(m.rows());
-  for (int i = 1; i < n; ++i)
-    for (int k = 0; k < i; ++k) b.row(i) -= m(i, k) * b.row(k);
-  for (int i = n - 1; i >= 0; --i) {
-    for (int k = i + 1; k < n; ++k) b.row(i) -= m(i, k) * b.row(k);
-    b.row(i) /= m(i, i);
-  }
+  substituteLuInPlace(lu.matrixLU(), b);
+}
+
+// The LU factors of a fixed-size square M: SmallLu up to kUnblockedLuBound, Eigen's PartialPivLU above
+// (its blocked algorithm; no matrix of the library's plants is that large).
+template <class Derived>
+auto partialPivotLu(const Eigen::MatrixBase<Derived>& m) {
+  if constexpr (Derived::RowsAtCompileTime <= kUnblockedLuBound)
+    return smallLu(m);
+  else
+    return Eigen::PartialPivLU<typename Derived::PlainObject>(m);
 }
 
 // ---- Covariances ----------------------------------------------------------------------------------------
