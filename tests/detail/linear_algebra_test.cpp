@@ -4,6 +4,7 @@
 // are rounding bounds: a few ε times the size of the problem and of its entries.
 
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 #include <random>
@@ -75,10 +76,12 @@ TEST(LinearAlgebra, TriangularSolvesInvertTheFactor) {
 
 // smallLu writes out the algorithm Eigen's PartialPivLU runs up to 16 × 16: the same pivots and the same
 // factors to the bit, ties between pivot candidates, exactly zero pivots and NaN included.
-template <int N>
-void expectEigensLu(const Eigen::Matrix<double, N, N>& m, const char* what) {
+template <class Matrix>
+void expectEigensLu(const Matrix& m, const char* what) {
+  constexpr int N = Matrix::RowsAtCompileTime;
+  using Scalar = typename Matrix::Scalar;
   const auto mine = mjukf::detail::smallLu(m);
-  const Eigen::PartialPivLU<Eigen::Matrix<double, N, N>> eigens(m);
+  const Eigen::PartialPivLU<Matrix> eigens(m);
   // Transpositions P (row k swapped with row t(k), in turn): what smallLu stores.
   const Eigen::Transpositions<N, N, int> swaps(mine.rowSwaps);
   Eigen::PermutationMatrix<N, N, int> p;
@@ -86,7 +89,7 @@ void expectEigensLu(const Eigen::Matrix<double, N, N>& m, const char* what) {
   EXPECT_EQ(p.indices(), eigens.permutationP().indices()) << what;
   for (int j = 0; j < N; ++j)
     for (int i = 0; i < N; ++i) {
-      const double a = mine.lu(i, j), b = eigens.matrixLU()(i, j);
+      const Scalar a = mine.lu(i, j), b = eigens.matrixLU()(i, j);
       EXPECT_TRUE(std::memcmp(&a, &b, sizeof a) == 0) << what << " (" << i << ", " << j << "): " << a << " vs " << b;
     }
 }
@@ -96,52 +99,71 @@ TEST(LinearAlgebra, SmallLuIsEigensPartialPivLuBitForBit) {
   std::normal_distribution<double> normal;
   Eigen::Matrix<double, 6, 6> random;
   for (double& v : random.reshaped()) v = normal(rng);
-  expectEigensLu<6>(random, "random 6 x 6");
+  expectEigensLu(random, "random 6 x 6");
   Eigen::Matrix<double, 16, 16> large;  // the bound: Eigen's last unblocked size
   for (double& v : large.reshaped()) v = normal(rng);
-  expectEigensLu<16>(large, "random 16 x 16");
+  expectEigensLu(large, "random 16 x 16");
+  // The MJUKF factors a row-major transpose, in double or float.
+  const Eigen::Matrix<double, 6, 6, Eigen::RowMajor> rowMajor = random.transpose();
+  expectEigensLu(rowMajor, "row-major 6 x 6");
+  const Eigen::Matrix<float, 6, 6> single = random.cast<float>();
+  expectEigensLu(single, "float 6 x 6");
   Eigen::Matrix4d ties;  // equal candidates in size: the first one is the pivot
   ties << 1, 2, 0, 1, -1, 0, 3, 2, 1, -2, 1, 0, 0, 1, 1, 1;
-  expectEigensLu<4>(ties, "ties");
+  expectEigensLu(ties, "ties");
   Eigen::Matrix4d zeroColumn = ties;  // an exactly zero pivot: left in place, the rest factored
   zeroColumn.col(1).setZero();
-  expectEigensLu<4>(zeroColumn, "zero pivot");
+  expectEigensLu(zeroColumn, "zero pivot");
   Eigen::Matrix4d rankOne = Eigen::Vector4d(1, -2, 3, 0.5) * Eigen::RowVector4d(2, 1, -1, 4);
-  expectEigensLu<4>(rankOne, "rank one");
+  expectEigensLu(rankOne, "rank one");
   Eigen::Matrix4d withNan = ties;
   withNan(2, 1) = std::numeric_limits<double>::quiet_NaN();
-  expectEigensLu<4>(withNan, "NaN");
-  expectEigensLu<1>(Eigen::Matrix<double, 1, 1>(-3.0), "1 x 1");
+  expectEigensLu(withNan, "NaN");
+  expectEigensLu(Eigen::Matrix<double, 1, 1>(-3.0), "1 x 1");
 }
 
 // The MJUKF's θ̂ covariance solves A M = C through M's partial-pivoting LU. Backward stable (Higham,
 // Accuracy and Stability of Numerical Algorithms, Thm 9.4): (M + ΔM) X = B with |ΔM| ≤ γ₃ₙ Pᵀ|L||U|,
-// so |M X − B| ≤ γ₃ₙ Pᵀ|L||U| |X|; a permuted M makes the pivoting matter.
-TEST(LinearAlgebra, LuSolveIsBackwardStable) {
-  std::mt19937_64 rng(5);
+// so |M X − B| ≤ γ₃ₙ Pᵀ|L||U| |X|; a permuted M makes the pivoting matter. The bound holds for Eigen's
+// partitioned LU above 16 × 16 too (the same operations in another order, Higham §13.1).
+template <int N>
+void expectBackwardStableSolves(std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
   std::normal_distribution<double> normal;
-  constexpr int N = 6;
   for (int trial = 0; trial < 20; ++trial) {
     Eigen::Matrix<double, N, N> m;
     Eigen::Matrix<double, N, 3> b;
     for (double& v : m.reshaped()) v = normal(rng);
     for (double& v : b.reshaped()) v = normal(rng);
     m.row(0).swap(m.row(N - 1));
-    const auto lu = mjukf::detail::smallLu(m);
+    const auto lu = mjukf::detail::partialPivotLu(m);
     Eigen::Matrix<double, N, 3> x = b;
     mjukf::detail::luSolveInPlace(lu, x);
-    const Eigen::Matrix<double, N, N> lower = lu.lu.template triangularView<Eigen::UnitLower>();
-    const Eigen::Matrix<double, N, N> upper = lu.lu.template triangularView<Eigen::Upper>();
+    Eigen::Matrix<double, N, N> factors;
     Eigen::PermutationMatrix<N, N, int> p;
-    p = Eigen::Transpositions<N, N, int>(lu.rowSwaps);
+    if constexpr (N <= mjukf::detail::kUnblockedLuBound) {
+      factors = lu.lu;
+      p = Eigen::Transpositions<N, N, int>(lu.rowSwaps);
+    } else {
+      factors = lu.matrixLU();
+      p = lu.permutationP();
+    }
+    const Eigen::Matrix<double, N, N> lower = factors.template triangularView<Eigen::UnitLower>();
+    const Eigen::Matrix<double, N, N> upper = factors.template triangularView<Eigen::Upper>();
     // The residual in long double, so that its own rounding does not count against the bound.
     using Wide = Eigen::Matrix<long double, N, 3>;
-    const Wide residual = (m.cast<long double>() * x.cast<long double>() - b.cast<long double>()).cwiseAbs();
+    const Wide residual =
+        (m.template cast<long double>() * x.template cast<long double>() - b.template cast<long double>()).cwiseAbs();
     const double gamma = 3 * N * kEps / (1 - 3 * N * kEps);
     const Eigen::Matrix<double, N, 3> bound =
         gamma * (p.transpose() * (lower.cwiseAbs() * upper.cwiseAbs())) * x.cwiseAbs();
-    EXPECT_TRUE((residual.array() <= bound.cast<long double>().array()).all()) << trial;
+    EXPECT_TRUE((residual.array() <= bound.template cast<long double>().array()).all()) << N << ": " << trial;
   }
+}
+
+TEST(LinearAlgebra, LuSolveIsBackwardStable) {
+  expectBackwardStableSolves<6>(5);   // smallLu
+  expectBackwardStableSolves<17>(6);  // above its bound: Eigen's PartialPivLU
 }
 
 TEST(LinearAlgebra, SymmetrizeAveragesTheTwoTrianglesAndKeepsTheDiagonal) {

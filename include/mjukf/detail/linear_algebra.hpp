@@ -6,8 +6,10 @@
 // draw, and the square-root factors of the square-root form (docs/algorithms.md §10: Householder factors
 // of B Bᵀ and AᵀA, rank-one updates and downdates of a Cholesky factor, a square root of a semi-definite
 // matrix), and the positive semi-definite part of a symmetric matrix (the MJUKF's floor of P⁻, §5.2).
-// Every function takes fixed-size Eigen matrices, writes into its arguments and allocates nothing; each is
-// written out where Eigen's general path costs more than the arithmetic at these sizes (said at each).
+// Every function takes fixed-size Eigen matrices, writes into its arguments and allocates nothing (one
+// exception: above 16 × 16, partialPivotLu is Eigen's blocked LU, whose general product takes its buffers
+// from the stack by alloca where the platform has it and from the heap where it has not); each is written
+// out where Eigen's general path costs more than the arithmetic at these sizes (said at each).
 
 #include <algorithm>
 #include <cmath>
@@ -215,9 +217,10 @@ bool isLowerTriangular(const Matrix& m) {
 }
 
 // LU with partial pivoting, P M = L U, for a fixed-size square M up to 16 × 16: Eigen's unblocked
-// algorithm, which its PartialPivLU runs at these sizes (the same pivots, the same bits), written out as
-// plain loops. Eigen's class also compiles its blocked path for larger matrices, a triangular solve and a
-// general product on dynamic blocks; a unit with the MJUKF's covariance of θ̂ spent about a second on it.
+// algorithm, which its PartialPivLU runs at these sizes (the same pivots, the same bits unless the
+// compiler fuses a(i, j) − a(i, k) a(k, j) in one and not the other), written out as plain loops. Eigen's class also
+// compiles its blocked path for larger matrices, a triangular solve and a general product on dynamic blocks; a unit
+// with the MJUKF's covariance of θ̂ spent about a second on it.
 inline constexpr int kUnblockedLuBound = 16;  // Eigen's UnBlockedBound (LU/PartialPivLU.h)
 
 template <class Matrix>

@@ -175,9 +175,9 @@ class ParameterErrorCovariance {
     const Joint& prior = priorWidenedBy(widening);
     measured_.template leftCols<N>() = jacobian;
     measured_.template rightCols<P>() = sensitivity;
-    measuredSpread_.noalias() = measured_ * prior;  // [H ψ] J⁻
+    measuredSpread_.noalias() = product(measured_, prior);  // [H ψ] J⁻
     MeasMatrix innovation = measurementNoise;
-    innovation.noalias() += measuredSpread_ * measured_.transpose();
+    innovation.noalias() += product(measuredSpread_, measured_.transpose());
     if (present)
       for (int j = 0; j < M; ++j)
         if (!(*present)(j)) {
@@ -257,7 +257,8 @@ class ParameterErrorCovariance {
   // covariance kernel takes Eigen's general product (linear_algebra.hpp), from it Eigen's choice. Eigen
   // itself takes the coefficient-wise product up to 7 × 7 and compiles its general product from 8 × 8
   // (about 1.4 s of a unit), where the two gave the same bits (1,000 random 8 × 8 products with depth 2, 4
-  // and 8, double and float, x86-64 -O2 and -O3).
+  // and 8, double and float, x86-64 -O2 and -O3, no FMA; Eigen's general product splits its sums on AVX
+  // float, AVX-512 and NEON, where the last bits may differ).
   template <class Lhs, class Rhs>
   static auto product(const Lhs& lhs, const Rhs& rhs) {
     if constexpr (atLeast<N + P>(generalKernelsFrom<Scalar>.covarianceProduct))
