@@ -1,10 +1,12 @@
 // kernel/<kernel>/<form>/<scalar>/<L>: each kernel of detail/linear_algebra.hpp that is chosen by size,
 // in each of its forms, on an L-dimensional point set of 2L + 1 points (a filter of augmented dimension
 // L): the threshold `generalKernelsFrom` is the smallest L from which the general form is faster.
-//   covariance: P = Σ Wᵢ dᵢ dᵢᵀ (L × L) — coefficientwise, triangle (one triangle, mirrored), gemm (both
-//     triangles: the general product as Eigen picks it);
-//   cross: P_xy = Σ Wᵢ dᵢ eᵢᵀ (L × ⌈L/2⌉, the chain's m = n/2) — coefficientwise, product;
-//   subtract: P − U Uᵀ (U L × ⌈L/2⌉) — coefficientwise, rank_update (one triangle, mirrored), gemm;
+//   covariance: P = Σ Wᵢ dᵢ dᵢᵀ (L × L) — coefficientwise, blocks (the library's general form: one
+//     triangle by register blocks, mirrored), and Eigen's forms, the general ones until blocks: triangle
+//     (its product into one triangle, mirrored), gemm (both triangles: the general product as Eigen picks it);
+//   cross: P_xy = Σ Wᵢ dᵢ eᵢᵀ (L × ⌈L/2⌉, the chain's m = n/2) — coefficientwise, blocks, product (Eigen's);
+//   subtract: P − U Uᵀ (U L × ⌈L/2⌉) — coefficientwise, blocks (one triangle, mirrored), rank_update
+//     (Eigen's, one triangle, mirrored), gemm (Eigen's, both triangles);
 //   cholesky: S Sᵀ = P — unrolled, blocked (Eigen's in-place LLT: the general form until `columns`),
 //     columns (a matrix-vector product per column).
 // scripts/scaling.sh runs it and writes the table of docs/performance-scaling.md.
@@ -61,9 +63,11 @@ void covariance(benchmark::State& state) {
     if constexpr (Form == 0)
       la::weightedCovarianceLowerCoefficientwise(in.d, in.w, in.p);
     else if constexpr (Form == 1)
-      la::weightedCovarianceLowerTriangle(in.d, in.w, in.p);
+      in.p.template triangularView<Eigen::Lower>() = (in.d * in.w.asDiagonal()) * in.d.transpose();
+    else if constexpr (Form == 2)
+      in.p.noalias() = (in.d * in.w.asDiagonal()) * in.d.transpose();
     else
-      la::weightedOuterSumProduct(in.d, in.d, in.w, in.p);
+      la::weightedCovarianceLowerTriangle(in.d, in.w, in.p);
     la::mirrorLowerTriangle(in.p);
     benchmark::DoNotOptimize(in.p.data());
     benchmark::ClobberMemory();
@@ -77,6 +81,8 @@ void cross(benchmark::State& state) {
     benchmark::DoNotOptimize(in.d.data());
     if constexpr (Form == 0)
       la::weightedOuterSumCoefficientwise(in.d, in.e, in.w, in.cross);
+    else if constexpr (Form == 1)
+      in.cross.noalias() = (in.d * in.w.asDiagonal()) * in.e.transpose();
     else
       la::weightedOuterSumProduct(in.d, in.e, in.w, in.cross);
     benchmark::DoNotOptimize(in.cross.data());
@@ -91,12 +97,16 @@ void subtract(benchmark::State& state) {
   for (auto _ : state) {
     in.p = prior;  // as the engine does: P = P⁻, then P −= U Uᵀ
     benchmark::DoNotOptimize(in.u.data());
-    if constexpr (Form == 0)
+    if constexpr (Form == 0) {
       la::subtractOuterCoefficientwise(in.p, in.u);
-    else if constexpr (Form == 1)
-      la::subtractOuterRankUpdate(in.p, in.u);
-    else
+    } else if constexpr (Form == 1) {
+      in.p.template selfadjointView<Eigen::Lower>().rankUpdate(in.u, Scalar(-1));
+      la::mirrorLowerTriangle(in.p);
+    } else if constexpr (Form == 2) {
       in.p.noalias() -= in.u * in.u.transpose();
+    } else {
+      la::subtractOuterRankUpdate(in.p, in.u);
+    }
     benchmark::DoNotOptimize(in.p.data());
     benchmark::ClobberMemory();
   }
@@ -132,11 +142,14 @@ void registerSize() {
   benchmark::RegisterBenchmark(("kernel/covariance/coefficientwise" + suffix).c_str(), covariance<Scalar, L, 0>);
   benchmark::RegisterBenchmark(("kernel/covariance/triangle" + suffix).c_str(), covariance<Scalar, L, 1>);
   benchmark::RegisterBenchmark(("kernel/covariance/gemm" + suffix).c_str(), covariance<Scalar, L, 2>);
+  benchmark::RegisterBenchmark(("kernel/covariance/blocks" + suffix).c_str(), covariance<Scalar, L, 3>);
   benchmark::RegisterBenchmark(("kernel/cross/coefficientwise" + suffix).c_str(), cross<Scalar, L, 0>);
   benchmark::RegisterBenchmark(("kernel/cross/product" + suffix).c_str(), cross<Scalar, L, 1>);
+  benchmark::RegisterBenchmark(("kernel/cross/blocks" + suffix).c_str(), cross<Scalar, L, 2>);
   benchmark::RegisterBenchmark(("kernel/subtract/coefficientwise" + suffix).c_str(), subtract<Scalar, L, 0>);
   benchmark::RegisterBenchmark(("kernel/subtract/rank_update" + suffix).c_str(), subtract<Scalar, L, 1>);
   benchmark::RegisterBenchmark(("kernel/subtract/gemm" + suffix).c_str(), subtract<Scalar, L, 2>);
+  benchmark::RegisterBenchmark(("kernel/subtract/blocks" + suffix).c_str(), subtract<Scalar, L, 3>);
   benchmark::RegisterBenchmark(("kernel/cholesky/unrolled" + suffix).c_str(), cholesky<Scalar, L, 0>);
   benchmark::RegisterBenchmark(("kernel/cholesky/blocked" + suffix).c_str(), cholesky<Scalar, L, 1>);
   benchmark::RegisterBenchmark(("kernel/cholesky/columns" + suffix).c_str(), cholesky<Scalar, L, 2>);

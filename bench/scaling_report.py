@@ -81,8 +81,10 @@ def exponent(rows, key, p, field):
 
 def kernel_table(kernels, scalar):
     forms = [("covariance", "coefficientwise"), ("covariance", "gemm"), ("covariance", "triangle"),
-             ("cross", "coefficientwise"), ("cross", "product"),
+             ("covariance", "blocks"),
+             ("cross", "coefficientwise"), ("cross", "product"), ("cross", "blocks"),
              ("subtract", "coefficientwise"), ("subtract", "rank_update"), ("subtract", "gemm"),
+             ("subtract", "blocks"),
              ("cholesky", "unrolled"), ("cholesky", "blocked"), ("cholesky", "columns")]
     sizes = sorted({int(m.group(1)) for name in kernels
                     for m in [re.match(rf"kernel/\w+/\w+/{scalar}/(\d+)$", name)] if m})
@@ -194,12 +196,15 @@ def main():
         w("that is chosen by size, in each of its forms, on a point set of 2L + 1 points, ns per call")
         w("(median of 5, the fastest form of each kernel in bold). covariance: Σ Wᵢ dᵢ dᵢᵀ (L × L);")
         w("cross: Σ Wᵢ dᵢ eᵢᵀ (L × ⌈L/2⌉); subtract: P − U Uᵀ (U L × ⌈L/2⌉); cholesky: the factor of an")
-        w("L × L P. Forms: coefficientwise/unrolled (written out, as before), gemm (Eigen's general")
-        w("product, both triangles), triangle (the product into the lower triangle, mirrored), product")
-        w("(GEMM), rank_update (`selfadjointView<Lower>().rankUpdate`, mirrored), blocked (Eigen's")
-        w("in-place LLT, the Cholesky's general form until `columns`), columns (left-looking, a")
-        w("matrix-vector product per column). A form a run did not have shows as –.\n")
-        w("Thresholds chosen (`generalKernelsFrom` in `detail/linear_algebra.hpp`). They were read, while")
+        w("L × L P. Forms: coefficientwise/unrolled (written out, as before), blocks (the library's")
+        w("general form of the products: `productWithTranspose`, register blocks over the operands in")
+        w("place, one triangle for covariance and subtract), and the general forms before it, Eigen's:")
+        w("gemm (its general product, both triangles), triangle (its product into the lower triangle,")
+        w("mirrored), product (GEMM), rank_update (`selfadjointView<Lower>().rankUpdate`, mirrored);")
+        w("blocked (Eigen's in-place LLT, the Cholesky's general form until `columns`), columns")
+        w("(left-looking, a matrix-vector product per column). A form a run did not have shows as –.\n")
+        w("Thresholds chosen (`generalKernelsFrom` in `detail/linear_algebra.hpp`), with Eigen's forms as")
+        w("the general ones; blocks replaced them without moving the thresholds. They were read, while")
         w("the run was going, off the wall-clock medians of its text output; the CPU-time medians of the")
         w("tables below (the figure this page uses everywhere) put four of them one or two sizes")
         w("elsewhere, at sizes where the forms differ by 1–20 %: they are left as chosen, the CPU-time")

@@ -166,6 +166,78 @@ TEST(LinearAlgebra, LuSolveIsBackwardStable) {
   expectBackwardStableSolves<17>(6);  // above its bound: Eigen's PartialPivLU
 }
 
+// productWithTranspose against A Bᵀ in long double: each entry a sum of K products, in error by at most
+// γ_K Σₖ |a(i, k)| |b(j, k)| (Higham §3.1). Shapes with rows left over below the last register block
+// (R not a multiple of two packets) and a narrower last column block (C not a multiple of 4); Lower
+// neither reads nor writes the strictly upper triangle (NaN left there stays), Subtract subtracts.
+template <class Scalar, int R, int C, int K>
+void expectProductWithTranspose(std::mt19937_64& rng) {
+  using la = mjukf::detail::ProductPart;
+  using Into = mjukf::detail::ProductInto;
+  std::normal_distribution<double> normal;
+  Eigen::Matrix<Scalar, R, K> a;
+  Eigen::Matrix<Scalar, C, K> b;
+  for (Scalar& v : a.reshaped()) v = Scalar(normal(rng));
+  for (Scalar& v : b.reshaped()) v = Scalar(normal(rng));
+  const Eigen::Matrix<long double, R, C> exact =
+      a.template cast<long double>() * b.template cast<long double>().transpose();
+  const double eps = std::numeric_limits<Scalar>::epsilon();
+  const Eigen::Matrix<double, R, C> bound =
+      K * eps / (1 - K * eps) *
+      (a.template cast<double>().cwiseAbs() * b.template cast<double>().cwiseAbs().transpose());
+  Eigen::Matrix<Scalar, R, C> full;
+  mjukf::detail::productWithTranspose<la::Full, Into::Assign>(a, b, full);
+  EXPECT_TRUE(
+      ((full.template cast<long double>() - exact).cwiseAbs().array() <= bound.template cast<long double>().array())
+          .all())
+      << R << " x " << C << " x " << K;
+  if constexpr (R == C) {
+    const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
+    Eigen::Matrix<Scalar, R, C> lower = Eigen::Matrix<Scalar, R, C>::Constant(nan);
+    mjukf::detail::productWithTranspose<la::Lower, Into::Assign>(a, b, lower);
+    Eigen::Matrix<Scalar, R, C> reduced = Eigen::Matrix<Scalar, R, C>::Constant(nan);
+    reduced.template triangularView<Eigen::Lower>().setConstant(Scalar(1));
+    mjukf::detail::productWithTranspose<la::Lower, Into::Subtract>(a, b, reduced);
+    for (int j = 0; j < C; ++j)
+      for (int i = 0; i < R; ++i) {
+        if (i < j) {
+          EXPECT_TRUE(std::isnan(lower(i, j)) && std::isnan(reduced(i, j))) << i << ", " << j;
+          continue;
+        }
+        EXPECT_EQ(lower(i, j), full(i, j)) << i << ", " << j;  // the same sum as the full product's
+        EXPECT_EQ(reduced(i, j), Scalar(1) - full(i, j)) << i << ", " << j;
+      }
+  }
+}
+
+TEST(LinearAlgebra, ProductWithTransposeIsABTransposed) {
+  std::mt19937_64 rng(17);
+  expectProductWithTranspose<double, 1, 1, 1>(rng);
+  expectProductWithTranspose<double, 3, 5, 7>(rng);     // no full block of rows
+  expectProductWithTranspose<double, 9, 9, 19>(rng);    // one row and one column left over
+  expectProductWithTranspose<double, 36, 16, 73>(rng);  // the chain's n = 32 JUKF: P_xy
+  expectProductWithTranspose<double, 36, 36, 73>(rng);  // … and P⁻
+  expectProductWithTranspose<float, 17, 17, 35>(rng);   // float: blocks of 8 rows, a diagonal inside one
+  expectProductWithTranspose<float, 12, 5, 3>(rng);
+}
+
+// On x86-64 without FMA, where Eigen's GEMM kernel sums every entry in order of k with one accumulator,
+// as productWithTranspose does: the same bits as Eigen's product (the claim in linear_algebra.hpp).
+#if defined(__x86_64__) && !defined(__FMA__)
+TEST(LinearAlgebra, ProductWithTransposeHasEigensBitsOnX86) {
+  std::mt19937_64 rng(18);
+  std::normal_distribution<double> normal;
+  Eigen::Matrix<double, 36, 73> a;
+  Eigen::Matrix<double, 16, 73> b;
+  for (double& v : a.reshaped()) v = normal(rng);
+  for (double& v : b.reshaped()) v = normal(rng);
+  Eigen::Matrix<double, 36, 16> mine, eigens;
+  mjukf::detail::productWithTranspose<mjukf::detail::ProductPart::Full, mjukf::detail::ProductInto::Assign>(a, b, mine);
+  eigens.noalias() = a * b.transpose();
+  EXPECT_EQ(mine, eigens);
+}
+#endif
+
 TEST(LinearAlgebra, SymmetrizeAveragesTheTwoTrianglesAndKeepsTheDiagonal) {
   Eigen::Matrix3d p;
   p << 1, 2, 3, 4, 5, 6, 7, 8, 9;

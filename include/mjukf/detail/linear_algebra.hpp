@@ -30,23 +30,26 @@ namespace mjukf::detail {
 // The weighted outer sums, P − U Uᵀ and the Cholesky factor below are written out coefficient by
 // coefficient (fully unrolled for the factor), which is fastest at the sizes of the paper's plants but
 // grows as L³ and stops using the vector units well: at L = 36 the outer sums were half of a step. From
-// a size on, each takes a general form instead: a matrix product (GEMM; for a covariance, from a larger
-// size, one triangle of it), a symmetric rank-k update of one triangle, a factorisation by columns (one
-// of Eigen's matrix-vector products each). The sizes are where the general form measured faster and
-// stayed so (`mjukf_kernel_bench`, each kernel in each form at L = 2 … 16, 20, 24, 28, 32, 36;
+// a size on, each takes a general form instead: the products a product by register blocks
+// (productWithTranspose; one triangle for a covariance and for P − U Uᵀ), the factor a factorisation by
+// columns (one of Eigen's matrix-vector products each). The sizes are where the general form measured
+// faster and stayed so (`mjukf_kernel_bench`, each kernel in each form at L = 2 … 16, 20, 24, 28, 32, 36;
 // docs/performance-scaling.md says which are a size or two off the CPU-time border), per scalar type,
 // with one exception: the double Cholesky, whose unrolled form stayed up to 10 % faster than Eigen's
 // blocked LLT up to L = 32 but whose code and compile time grow as L³, is general from 20. They were
-// measured with the factor by Eigen's blocked LLT; the factor by columns that replaced it took fewer
-// instructions at every size from the threshold on, and the sizes were not measured again. The choice is
-// made at compile time on the fixed size L (for a point set, of its 2L + 1 or 2L points).
-// MJUKF_GENERAL_KERNELS_FROM overrides them all (scripts/scaling.sh builds the small-size kernels at
-// every size with it).
+// measured with Eigen's forms as the general ones (its GEMM, its product into one triangle, its rank-k
+// update, its blocked LLT); the register blocks, which form the same sums without packing them first,
+// and the factor by columns took less time or fewer instructions at every size measured since, and the
+// sizes were not measured again. The choice is made at compile time on the fixed size L (for a point
+// set, of its 2L + 1 or 2L points). MJUKF_GENERAL_KERNELS_FROM overrides them all (scripts/scaling.sh
+// builds the small-size kernels at every size with it).
 struct GeneralKernelSizes {
-  int covarianceProduct;   // Σ Wᵢ dᵢ dᵢᵀ by GEMM, both triangles
-  int covarianceTriangle;  // … by a product of the lower triangle only, mirrored
-  int crossProduct;        // Σ Wᵢ aᵢ bᵢᵀ by GEMM
-  int subtractRankUpdate;  // P − U Uᵀ by a rank-k update of the lower triangle, mirrored
+  int covarianceProduct;   // Σ Wᵢ dᵢ dᵢᵀ by register blocks (measured as GEMM, both triangles)
+  int covarianceTriangle;  // the MJUKF's covariance of θ̂ by blocks and one triangle (measured as Eigen's
+                           // product into one triangle)
+  int crossProduct;        // Σ Wᵢ aᵢ bᵢᵀ by register blocks (measured as GEMM)
+  int subtractRankUpdate;  // P − U Uᵀ by register blocks, lower triangle, mirrored (measured as Eigen's
+                           // rank-k update)
   int cholesky;            // the factor by columns (choleskyLowerByColumns)
 };
 #ifdef MJUKF_GENERAL_KERNELS_FROM
@@ -308,6 +311,84 @@ void symmetrize(Matrix& p) {
     for (int r = c + 1; r < p.rows(); ++r) p(r, c) = p(c, r) = Scalar(0.5) * p(r, c) + Scalar(0.5) * p(c, r);
 }
 
+// ---- A register-blocked product with a transpose (the general forms below) --------------------------------
+
+enum class ProductPart { Full, Lower };       // every entry of out, or its lower triangle i ≥ j only
+enum class ProductInto { Assign, Subtract };  // out(i, j) = Σ, or out(i, j) −= Σ
+
+// out(i, j) = Σₖ a(i, k) b(j, k) (or −= it), i.e. A Bᵀ, for column-major A (R × K) and B (C × K) with
+// contiguous columns; Part::Lower leaves the strictly upper triangle of out unread and unwritten. Blocks
+// of out two packets of rows high and four columns wide are held in eight registers while k runs over
+// the columns of A and B, every entry summed in order of k with one accumulator and Eigen's pmadd, as
+// Eigen's GEMM kernel (gebp) sums it on x86-64: a full product or a subtraction there gives its bits.
+// What it leaves out is GEMM's packing of both operands into panels and its dynamic-size dispatch, which
+// at the filters' sizes cost more than they save: with the deviations' columns already contiguous, the
+// packing only copies (L = 36, 73 points, double, x86-64: P⁻'s triangle 7.9 → 6.9 µs, P_xy 6.0 → 5.3,
+// P_yy 2.1 → 1.5, P − U Uᵀ 1.78 → 1.74; bench/performance_notes.md).
+template <ProductPart Part, ProductInto Into, class A, class B, class Out>
+void productWithTranspose(const Eigen::MatrixBase<A>& a, const Eigen::MatrixBase<B>& b, Eigen::MatrixBase<Out>& out) {
+  using Scalar = typename Out::Scalar;
+  using Packet = typename Eigen::internal::packet_traits<Scalar>::type;
+  constexpr int kPacket = Eigen::internal::packet_traits<Scalar>::size;
+  constexpr int kRows = 2 * kPacket, kCols = 4;
+  constexpr int R = A::RowsAtCompileTime, C = B::RowsAtCompileTime, K = A::ColsAtCompileTime;
+  static_assert(R != Eigen::Dynamic && C != Eigen::Dynamic && K == B::ColsAtCompileTime,
+                "productWithTranspose: fixed sizes, A and B with the same number of columns");
+  static_assert(!(A::Flags & Eigen::RowMajorBit) && !(B::Flags & Eigen::RowMajorBit) &&
+                    (A::Flags & Eigen::DirectAccessBit) && (B::Flags & Eigen::DirectAccessBit),
+                "productWithTranspose: column-major operands held in memory");
+  const Scalar* pa = a.derived().data();
+  const Scalar* pb = b.derived().data();
+  const Eigen::Index strideA = a.derived().outerStride(), strideB = b.derived().outerStride();
+  const auto put = [&](int i, int j, Scalar sum) {
+    if (Part == ProductPart::Lower && i < j) return;
+    if constexpr (Into == ProductInto::Assign)
+      out(i, j) = sum;
+    else
+      out(i, j) -= sum;
+  };
+  constexpr int blockedRows = R / kRows * kRows;
+  for (int j0 = 0; j0 < C; j0 += kCols) {
+    const int cols = std::min(kCols, C - j0);
+    const int firstRow = Part == ProductPart::Lower ? j0 / kRows * kRows : 0;  // the block holding row j0
+    for (int i0 = firstRow; i0 < blockedRows; i0 += kRows) {
+      Packet sum[2][kCols];
+      for (int c = 0; c < kCols; ++c) sum[0][c] = sum[1][c] = Eigen::internal::pset1<Packet>(Scalar(0));
+      if (cols == kCols) {
+        for (int k = 0; k < K; ++k) {
+          const Packet top = Eigen::internal::ploadu<Packet>(pa + i0 + k * strideA);
+          const Packet bottom = Eigen::internal::ploadu<Packet>(pa + i0 + kPacket + k * strideA);
+          for (int c = 0; c < kCols; ++c) {
+            const Packet bc = Eigen::internal::pset1<Packet>(pb[j0 + c + k * strideB]);
+            sum[0][c] = Eigen::internal::pmadd(top, bc, sum[0][c]);
+            sum[1][c] = Eigen::internal::pmadd(bottom, bc, sum[1][c]);
+          }
+        }
+      } else {  // the last, narrower column block: one column at a time
+        for (int c = 0; c < cols; ++c)
+          for (int k = 0; k < K; ++k) {
+            const Packet bc = Eigen::internal::pset1<Packet>(pb[j0 + c + k * strideB]);
+            sum[0][c] = Eigen::internal::pmadd(Eigen::internal::ploadu<Packet>(pa + i0 + k * strideA), bc, sum[0][c]);
+            sum[1][c] =
+                Eigen::internal::pmadd(Eigen::internal::ploadu<Packet>(pa + i0 + kPacket + k * strideA), bc, sum[1][c]);
+          }
+      }
+      Scalar tile[kRows];
+      for (int c = 0; c < cols; ++c) {
+        Eigen::internal::pstoreu(tile, sum[0][c]);
+        Eigen::internal::pstoreu(tile + kPacket, sum[1][c]);
+        for (int r = 0; r < kRows; ++r) put(i0 + r, j0 + c, tile[r]);
+      }
+    }
+    for (int i = std::max(blockedRows, firstRow); i < R; ++i)  // the rows below the last full block
+      for (int c = 0; c < cols; ++c) {
+        Scalar sum(0);
+        for (int k = 0; k < K; ++k) sum += pa[i + k * strideA] * pb[j0 + c + k * strideB];
+        put(i, j0 + c, sum);
+      }
+  }
+}
+
 // ---- Weighted moments of a point set (the unscented transform, docs/algorithms.md §2–3) ---------------------
 
 // mean = Σ Wmᵢ Xᵢ
@@ -321,7 +402,9 @@ void weightedMean(const Eigen::MatrixBase<Points>& points, const Eigen::MatrixBa
 // cross-covariance. Small point sets: a coefficient-wise product (lazyProduct): left to choose, Eigen
 // takes its general GEMM kernel once rows + columns + depth exceed 20 (JUKF on the robot: 6 + 6 + 13),
 // and packing the operands then costs more than the whole rest of the step. Large ones (L = Count / 2
-// from crossProduct on): that general product, which the packing then pays for.
+// from crossProduct on): (a W) bᵀ by register blocks (productWithTranspose), the sums of Eigen's general
+// product without its packing; a W is formed first, as Eigen's product forms it, and b is read in place
+// when it is a matrix (an expression is evaluated once).
 template <class DevA, class DevB, class Weights, class Out>
 void weightedOuterSumCoefficientwise(const Eigen::MatrixBase<DevA>& a, const Eigen::MatrixBase<DevB>& b,
                                      const Eigen::MatrixBase<Weights>& weights, Eigen::MatrixBase<Out>& out) {
@@ -330,7 +413,9 @@ void weightedOuterSumCoefficientwise(const Eigen::MatrixBase<DevA>& a, const Eig
 template <class DevA, class DevB, class Weights, class Out>
 void weightedOuterSumProduct(const Eigen::MatrixBase<DevA>& a, const Eigen::MatrixBase<DevB>& b,
                              const Eigen::MatrixBase<Weights>& weights, Eigen::MatrixBase<Out>& out) {
-  out.noalias() = (a * weights.asDiagonal()) * b.transpose();
+  const typename DevA::PlainObject weighted = a * weights.asDiagonal();
+  const typename DevB::PlainObject& right = b.derived();  // no copy when b is a matrix already
+  productWithTranspose<ProductPart::Full, ProductInto::Assign>(weighted, right, out);
 }
 template <class DevA, class DevB, class Weights, class Out>
 void weightedOuterSum(const Eigen::MatrixBase<DevA>& a, const Eigen::MatrixBase<DevB>& b,
@@ -371,10 +456,12 @@ void forEachLowerColumn(F&& f) {
 //    weighted deviations' rows with row c: the lower triangle of the full coefficient-wise sum
 //    (weightedOuterSumCoefficientwise) up to the order of its sums, which Eigen's vectorisation chooses
 //    (that full sum is not exactly symmetric either: (Wₖ aᵢₖ) aⱼₖ and (Wₖ aⱼₖ) aᵢₖ round apart);
-//  - from covarianceProduct, GEMM (both triangles: its packing costs more than the half it could skip);
-//  - from covarianceTriangle, a product of the lower triangle only. (One matrix-vector product per
-//    column took 7–23 % fewer instructions at L = 20, 24, 28 and 36, but 2 % (double) and 14 % (float)
-//    more at 32, the chain's n = 32: not taken.)
+//  - from covarianceProduct, the lower triangle of (d W) dᵀ by register blocks (productWithTranspose):
+//    each entry the sum Eigen's general product forms for it, without its packing. (Before it, the
+//    general product of both triangles up to covarianceTriangle and Eigen's product into one triangle
+//    from there, which packed too; one matrix-vector product per column had taken 7–23 % fewer
+//    instructions than the latter at L = 20, 24, 28 and 36, but 2 % (double) and 14 % (float) more at
+//    32, the chain's n = 32: not taken.)
 template <class Dev, class Weights, class Out>
 void weightedCovarianceLowerCoefficientwise(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase<Weights>& weights,
                                             Eigen::MatrixBase<Out>& out) {
@@ -387,16 +474,16 @@ void weightedCovarianceLowerCoefficientwise(const Eigen::MatrixBase<Dev>& d, con
 template <class Dev, class Weights, class Out>
 void weightedCovarianceLowerTriangle(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase<Weights>& weights,
                                      Eigen::MatrixBase<Out>& out) {
-  out.template triangularView<Eigen::Lower>() = (d * weights.asDiagonal()) * d.transpose();
+  const typename Dev::PlainObject weighted = d * weights.asDiagonal();
+  const typename Dev::PlainObject& right = d.derived();  // no copy when d is a matrix already
+  productWithTranspose<ProductPart::Lower, ProductInto::Assign>(weighted, right, out);
 }
 template <class Dev, class Weights, class Out>
 void weightedCovarianceLower(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase<Weights>& weights,
                              Eigen::MatrixBase<Out>& out) {
   constexpr int L = Dev::ColsAtCompileTime / 2;
-  if constexpr (atLeast<L>(generalKernelsFrom<typename Out::Scalar>.covarianceTriangle))
+  if constexpr (atLeast<L>(generalKernelsFrom<typename Out::Scalar>.covarianceProduct))
     weightedCovarianceLowerTriangle(d, weights, out);
-  else if constexpr (atLeast<L>(generalKernelsFrom<typename Out::Scalar>.covarianceProduct))
-    weightedOuterSumProduct(d, d, weights, out);
   else
     weightedCovarianceLowerCoefficientwise(d, weights, out);
 }
@@ -411,8 +498,9 @@ void weightedCovariance(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase
 // P ← P − U Uᵀ (U = P_xy S⁻ᵀ, the measurement update's K P_yy Kᵀ), exactly symmetric when P is: the
 // lower triangle is computed and mirrored. Small L: coefficient-wise, column c's rows c … L − 1 (a
 // coefficient-wise product over both triangles is not symmetric: Eigen's vectorisation sums some
-// coefficients in another order than their mirror images). Large L: a symmetric rank-k update of the
-// lower triangle.
+// coefficients in another order than their mirror images). Large L: the lower triangle of U Uᵀ by
+// register blocks (productWithTranspose), the sums of Eigen's symmetric rank-k update without its
+// packing.
 template <class Cov, class Cols>
 void subtractOuterCoefficientwise(Eigen::MatrixBase<Cov>& p, const Eigen::MatrixBase<Cols>& u) {
   forEachLowerColumn<Cov::RowsAtCompileTime>([&](auto c, auto rows) {
@@ -422,8 +510,8 @@ void subtractOuterCoefficientwise(Eigen::MatrixBase<Cov>& p, const Eigen::Matrix
 }
 template <class Cov, class Cols>
 void subtractOuterRankUpdate(Eigen::MatrixBase<Cov>& p, const Eigen::MatrixBase<Cols>& u) {
-  using Scalar = typename Cov::Scalar;
-  p.template selfadjointView<Eigen::Lower>().rankUpdate(u, Scalar(-1));
+  const typename Cols::PlainObject& columns = u.derived();  // no copy when u is a matrix already
+  productWithTranspose<ProductPart::Lower, ProductInto::Subtract>(columns, columns, p);
   mirrorLowerTriangle(p);
 }
 template <class Cov, class Cols>
