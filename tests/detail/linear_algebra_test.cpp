@@ -213,12 +213,32 @@ void expectProductWithTranspose(std::mt19937_64& rng) {
 TEST(LinearAlgebra, ProductWithTransposeIsABTransposed) {
   std::mt19937_64 rng(17);
   expectProductWithTranspose<double, 1, 1, 1>(rng);
+  expectProductWithTranspose<double, 1, 6, 9>(rng);  // a single row, which Eigen stores row-major
+  expectProductWithTranspose<double, 6, 1, 9>(rng);  // … and a single measurement
+  expectProductWithTranspose<double, 1, 1, 9>(rng);
   expectProductWithTranspose<double, 3, 5, 7>(rng);     // no full block of rows
   expectProductWithTranspose<double, 9, 9, 19>(rng);    // one row and one column left over
   expectProductWithTranspose<double, 36, 16, 73>(rng);  // the chain's n = 32 JUKF: P_xy
   expectProductWithTranspose<double, 36, 36, 73>(rng);  // … and P⁻
   expectProductWithTranspose<float, 17, 17, 35>(rng);   // float: blocks of 8 rows, a diagonal inside one
   expectProductWithTranspose<float, 12, 5, 3>(rng);
+}
+
+// A plant with one measurement: its deviations are a single row, which Eigen stores row-major. The
+// general form of P_xy (from crossProduct on) takes it as the coefficient-wise one does, to the rounding
+// of two sums of Count products in different orders: 2 γ_{Count+2} Σ |Wᵢ| |dᵢ| |eᵢ|.
+TEST(LinearAlgebra, CrossCovarianceOfASingleMeasurement) {
+  constexpr int L = 12, Count = 2 * L + 1;
+  const Eigen::Matrix<double, L, Count> d = Eigen::Matrix<double, L, Count>::Random();
+  const Eigen::Matrix<double, 1, Count> e = Eigen::Matrix<double, 1, Count>::Random();
+  const Eigen::Matrix<double, Count, 1> w = Eigen::Matrix<double, Count, 1>::Random();
+  Eigen::Matrix<double, L, 1> general, coefficientwise;
+  mjukf::detail::weightedOuterSumProduct(d, e, w, general);
+  mjukf::detail::weightedOuterSumCoefficientwise(d, e, w, coefficientwise);
+  const double gamma = (Count + 2) * kEps / (1 - (Count + 2) * kEps);
+  const Eigen::Matrix<double, L, 1> bound =
+      2 * gamma * (d.cwiseAbs() * w.cwiseAbs().asDiagonal() * e.cwiseAbs().transpose());
+  EXPECT_TRUE(((general - coefficientwise).cwiseAbs().array() <= bound.array()).all());
 }
 
 // On x86-64 without FMA, where Eigen's GEMM kernel sums every entry in order of k with one accumulator,

@@ -334,12 +334,15 @@ void productWithTranspose(const Eigen::MatrixBase<A>& a, const Eigen::MatrixBase
   constexpr int R = A::RowsAtCompileTime, C = B::RowsAtCompileTime, K = A::ColsAtCompileTime;
   static_assert(R != Eigen::Dynamic && C != Eigen::Dynamic && K == B::ColsAtCompileTime,
                 "productWithTranspose: fixed sizes, A and B with the same number of columns");
-  static_assert(!(A::Flags & Eigen::RowMajorBit) && !(B::Flags & Eigen::RowMajorBit) &&
+  // Column-major, or a single row (which Eigen stores row-major: the blocks of rows below never run on it).
+  static_assert((!(A::Flags & Eigen::RowMajorBit) || R == 1) && (!(B::Flags & Eigen::RowMajorBit) || C == 1) &&
                     (A::Flags & Eigen::DirectAccessBit) && (B::Flags & Eigen::DirectAccessBit),
                 "productWithTranspose: column-major operands held in memory");
   const Scalar* pa = a.derived().data();
   const Scalar* pb = b.derived().data();
-  const Eigen::Index strideA = a.derived().outerStride(), strideB = b.derived().outerStride();
+  // a(i, k) = pa[i + k strideA] (i = 0 only for a single row), and so for b.
+  const Eigen::Index strideA = R == 1 ? a.derived().innerStride() : a.derived().outerStride();
+  const Eigen::Index strideB = C == 1 ? b.derived().innerStride() : b.derived().outerStride();
   const auto put = [&](int i, int j, Scalar sum) {
     if (Part == ProductPart::Lower && i < j) return;
     if constexpr (Into == ProductInto::Assign)
