@@ -323,8 +323,8 @@ enum class ProductInto { Assign, Subtract };  // out(i, j) = Σ, or out(i, j) �
 // Eigen's GEMM kernel (gebp) sums it on x86-64: a full product or a subtraction there gives its bits.
 // What it leaves out is GEMM's packing of both operands into panels and its dynamic-size dispatch, which
 // at the filters' sizes cost more than they save: with the deviations' columns already contiguous, the
-// packing only copies (L = 36, 73 points, double, x86-64: P⁻'s triangle 7.9 → 6.9 µs, P_xy 6.0 → 5.3,
-// P_yy 2.1 → 1.5, P − U Uᵀ 1.78 → 1.74; bench/performance_notes.md).
+// packing only copies (`mjukf_kernel_bench`, L = 36, double, x86-64: covariance 8.4 → 6.9 µs, 36 × 18
+// cross-covariance 6.5 → 6.1, P − U Uᵀ 2.2 → 1.9; bench/performance_notes.md).
 template <ProductPart Part, ProductInto Into, class A, class B, class Out>
 void productWithTranspose(const Eigen::MatrixBase<A>& a, const Eigen::MatrixBase<B>& b, Eigen::MatrixBase<Out>& out) {
   using Scalar = typename Out::Scalar;
@@ -383,12 +383,30 @@ void productWithTranspose(const Eigen::MatrixBase<A>& a, const Eigen::MatrixBase
         for (int r = 0; r < kRows; ++r) put(i0 + r, j0 + c, tile[r]);
       }
     }
-    for (int i = std::max(blockedRows, firstRow); i < R; ++i)  // the rows below the last full block
-      for (int c = 0; c < cols; ++c) {
-        Scalar sum(0);
-        for (int k = 0; k < K; ++k) sum += pa[i + k * strideA] * pb[j0 + c + k * strideB];
-        put(i, j0 + c, sum);
+    // The rows below the last full block: one packet of them if there are enough, then one row at a
+    // time, each with the block's columns summed side by side (independent sums, not one long chain).
+    int i = std::max(blockedRows, firstRow);
+    if (kPacket > 1 && R - i >= kPacket) {
+      Packet sum[kCols];
+      for (int c = 0; c < kCols; ++c) sum[c] = Eigen::internal::pset1<Packet>(Scalar(0));
+      for (int k = 0; k < K; ++k) {
+        const Packet rows = Eigen::internal::ploadu<Packet>(pa + i + k * strideA);
+        for (int c = 0; c < cols; ++c)
+          sum[c] = Eigen::internal::pmadd(rows, Eigen::internal::pset1<Packet>(pb[j0 + c + k * strideB]), sum[c]);
       }
+      Scalar tile[kPacket];
+      for (int c = 0; c < cols; ++c) {
+        Eigen::internal::pstoreu(tile, sum[c]);
+        for (int r = 0; r < kPacket; ++r) put(i + r, j0 + c, tile[r]);
+      }
+      i += kPacket;
+    }
+    for (; i < R; ++i) {
+      Scalar sum[kCols] = {};
+      for (int k = 0; k < K; ++k)
+        for (int c = 0; c < cols; ++c) sum[c] += pa[i + k * strideA] * pb[j0 + c + k * strideB];
+      for (int c = 0; c < cols; ++c) put(i, j0 + c, sum[c]);
+    }
   }
 }
 
