@@ -431,12 +431,18 @@ void weightedOuterSumCoefficientwise(const Eigen::MatrixBase<DevA>& a, const Eig
                                      const Eigen::MatrixBase<Weights>& weights, Eigen::MatrixBase<Out>& out) {
   out.noalias() = (a * weights.asDiagonal()).lazyProduct(b.transpose());
 }
+// (a W) bᵀ into out (Part: all of it, or its lower triangle), by productWithTranspose.
+template <ProductPart Part, class DevA, class DevB, class Weights, class Out>
+void weightedProductWithTranspose(const Eigen::MatrixBase<DevA>& a, const Eigen::MatrixBase<DevB>& b,
+                                  const Eigen::MatrixBase<Weights>& weights, Eigen::MatrixBase<Out>& out) {
+  const typename DevA::PlainObject weighted = a * weights.asDiagonal();
+  const typename DevB::PlainObject& right = b.derived();  // no copy when b is a matrix already
+  productWithTranspose<Part, ProductInto::Assign>(weighted, right, out);
+}
 template <class DevA, class DevB, class Weights, class Out>
 void weightedOuterSumProduct(const Eigen::MatrixBase<DevA>& a, const Eigen::MatrixBase<DevB>& b,
                              const Eigen::MatrixBase<Weights>& weights, Eigen::MatrixBase<Out>& out) {
-  const typename DevA::PlainObject weighted = a * weights.asDiagonal();
-  const typename DevB::PlainObject& right = b.derived();  // no copy when b is a matrix already
-  productWithTranspose<ProductPart::Full, ProductInto::Assign>(weighted, right, out);
+  weightedProductWithTranspose<ProductPart::Full>(a, b, weights, out);
 }
 template <class DevA, class DevB, class Weights, class Out>
 void weightedOuterSum(const Eigen::MatrixBase<DevA>& a, const Eigen::MatrixBase<DevB>& b,
@@ -495,9 +501,7 @@ void weightedCovarianceLowerCoefficientwise(const Eigen::MatrixBase<Dev>& d, con
 template <class Dev, class Weights, class Out>
 void weightedCovarianceLowerTriangle(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase<Weights>& weights,
                                      Eigen::MatrixBase<Out>& out) {
-  const typename Dev::PlainObject weighted = d * weights.asDiagonal();
-  const typename Dev::PlainObject& right = d.derived();  // no copy when d is a matrix already
-  productWithTranspose<ProductPart::Lower, ProductInto::Assign>(weighted, right, out);
+  weightedProductWithTranspose<ProductPart::Lower>(d, d, weights, out);
 }
 template <class Dev, class Weights, class Out>
 void weightedCovarianceLower(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase<Weights>& weights,

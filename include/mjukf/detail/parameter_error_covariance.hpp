@@ -253,8 +253,9 @@ class ParameterErrorCovariance {
   const Joint& committed() const { return joint_; }
 
  private:
-  // A product with (n + p)-row or -column factors: coefficient by coefficient below the size where the
-  // covariance kernel takes Eigen's general product (linear_algebra.hpp), from it Eigen's choice. Eigen
+  // A product with (n + p)-row or -column factors: coefficient by coefficient below the size from which
+  // the covariance kernels take their general form (covarianceProduct, linear_algebra.hpp), from it
+  // Eigen's choice. Eigen
   // itself takes the coefficient-wise product up to 7 × 7 and compiles its general product from 8 × 8
   // (about 1.4 s of a unit), where the two gave the same bits (1,000 random 8 × 8 products with depth 2, 4
   // and 8, double and float, x86-64 -O2 and -O3, no FMA; Eigen's general product splits its sums on AVX
