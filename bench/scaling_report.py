@@ -86,8 +86,7 @@ def kernel_table(kernels, scalar):
              ("subtract", "coefficientwise"), ("subtract", "rank_update"), ("subtract", "gemm"),
              ("subtract", "blocks"),
              ("cholesky", "unrolled"), ("cholesky", "blocked"), ("cholesky", "columns")]
-    sizes = sorted({int(m.group(1)) for name in kernels
-                    for m in [re.match(rf"kernel/\w+/\w+/{scalar}/(\d+)$", name)] if m})
+    sizes = kernel_sizes(kernels, scalar)
     lines = ["| L | " + " | ".join(f"{k} {f}" for k, f in forms) + " |", "|---" * (len(forms) + 1) + "|"]
     for size in sizes:
         cells = []
@@ -101,6 +100,56 @@ def kernel_table(kernels, scalar):
             cells.append(cell)
         lines.append(f"| {size} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
+
+
+def kernel_sizes(kernels, scalar):
+    return sorted({int(m.group(1)) for name in kernels
+                   for m in [re.match(rf"kernel/\w+/\w+/{scalar}/(\d+)$", name)] if m})
+
+
+def ranges(sizes):
+    """'8, 9, 11 and 17–19' for the sizes [8, 9, 11, 17, 18, 19]."""
+    parts, run = [], []
+    for n in sizes:
+        if run and n != run[-1] + 1:
+            parts.append(run)
+            run = []
+        run.append(n)
+    if run:
+        parts.append(run)
+    text = [f"{r[0]}" if len(r) == 1 else f"{r[0]}, {r[1]}" if len(r) == 2 else f"{r[0]}–{r[-1]}" for r in parts]
+    return ", ".join(text[:-1]) + " and " + text[-1] if len(text) > 1 else "".join(text)
+
+
+def border(kernels, kernel, written, general, scalar):
+    """Where the general form overtakes the written-out one in this run: the smallest measured L from which
+    it is as fast or faster at every larger measured L (as the tables show them, rounded to ns), and the
+    smaller sizes where it is faster or equal as well."""
+    sizes = [n for n in kernel_sizes(kernels, scalar)
+             if f"kernel/{kernel}/{written}/{scalar}/{n}" in kernels and f"kernel/{kernel}/{general}/{scalar}/{n}" in kernels]
+    if not sizes:
+        return None, ""
+    t = {n: (round(kernels[f"kernel/{kernel}/{written}/{scalar}/{n}"][0]),
+             round(kernels[f"kernel/{kernel}/{general}/{scalar}/{n}"][0])) for n in sizes}
+    start = len(sizes)
+    while start > 0 and t[sizes[start - 1]][1] <= t[sizes[start - 1]][0]:
+        start -= 1
+    if start == len(sizes):
+        return f"above {sizes[-1]}", ""
+    text = f"{sizes[0]} or below" if start == 0 else f"{sizes[start]}"
+    faster = [n for n in sizes[:start] if t[n][1] < t[n][0]]
+    equal = [n for n in sizes[:start] if t[n][1] == t[n][0]]
+    notes = ([f"{general} also at {ranges(faster)}"] if faster else []) + ([f"equal at {ranges(equal)}"] if equal else [])
+    return text, ", ".join(notes)
+
+
+def border_cell(kernels, kernel, written, general):
+    found = {scalar: border(kernels, kernel, written, general, scalar) for scalar in ("double", "float")}
+    if all(b is None for b, _ in found.values()):
+        return "not in this run"
+    cell = "; ".join(b or "–" for b, _ in found.values())
+    notes = "; ".join(f"{scalar}: {note}" for scalar, (_, note) in found.items() if note)
+    return f"{cell} ({notes})" if notes else cell
 
 
 def fmt(x, digits=2):
@@ -211,17 +260,18 @@ def main():
         w("that earlier run was going, off the wall-clock medians of its text output. The last column is")
         w("where the tables below (CPU-time medians, the figure this page uses everywhere) put the border")
         w("between the written-out form and blocks, the two forms the library now chooses between, within")
-        w("the sizes measured (L = 8 … 36, not 10, 13, 15 or 17–19): the thresholds are left as chosen until")
+        measured = sorted(set(kernel_sizes(kernels, "double")) | set(kernel_sizes(kernels, "float")))
+        w(f"the sizes measured (L = {', '.join(map(str, measured))}): the thresholds are left as chosen until")
         w("a change of them is measured on the filters' steps as well. The Cholesky's was chosen with")
         w("Eigen's blocked LLT; the factor by columns that replaced it took fewer instructions at every size")
         w("from the threshold on (CHANGELOG), and it was not measured again.\n")
-        w("| kernel | double | float | border, written out / blocks (double; float) |")
+        w("| kernel | double | float | border, written out / general form (double; float) |")
         w("|---|---|---|---|")
-        w("| covariance: blocks from | 9 | 9 | 12; 12 (float: blocks also at 8, equal at 9) |")
+        w(f"| covariance: blocks from | 9 | 9 | {border_cell(kernels, 'covariance', 'coefficientwise', 'blocks')} |")
         w("| covariance: one triangle from (the MJUKF's P_θ) | 20 | 28 | – (blocks are one triangle) |")
-        w("| cross-covariance: blocks from | 11 | 14 | 8 or below; 12 (float: blocks also at 8 and 9) |")
-        w("| P − U Uᵀ: blocks from | 20 | 24 | 20; 32 |")
-        w("| Cholesky: by columns from | 20 (see below) | 24 | not in this run |")
+        w(f"| cross-covariance: blocks from | 11 | 14 | {border_cell(kernels, 'cross', 'coefficientwise', 'blocks')} |")
+        w(f"| P − U Uᵀ: blocks from | 20 | 24 | {border_cell(kernels, 'subtract', 'coefficientwise', 'blocks')} |")
+        w(f"| Cholesky: by columns from | 20 (see below) | 24 | {border_cell(kernels, 'cholesky', 'unrolled', 'columns')} |")
         w("")
         w("The one deliberate exception is the double Cholesky: the unrolled factor stayed up to 10 %")
         w("faster than Eigen's blocked LLT up to L = 32 (36: blocked faster), but its straight-line code")
