@@ -241,6 +241,38 @@ TEST(LinearAlgebra, CrossCovarianceOfASingleMeasurement) {
   EXPECT_TRUE(((general - coefficientwise).cwiseAbs().array() <= bound.array()).all());
 }
 
+// weightColumns and deviationsFrom form each coefficient by one multiplication or subtraction, as Eigen's
+// expressions do: the same bits on any platform, at every shape the filters use (rows a multiple of the
+// packet or not, a single row, which Eigen stores row-major, float and double).
+template <class Scalar, int R, int K>
+void expectColumnMapsAreEigens(std::mt19937_64& rng) {
+  std::normal_distribution<double> normal;
+  Eigen::Matrix<Scalar, R, K> points;
+  Eigen::Matrix<Scalar, R, 1> center;
+  Eigen::Matrix<Scalar, K, 1> weights;
+  for (Scalar& v : points.reshaped()) v = Scalar(normal(rng));
+  for (Scalar& v : center.reshaped()) v = Scalar(normal(rng));
+  for (Scalar& v : weights.reshaped()) v = Scalar(normal(rng));
+  Eigen::Matrix<Scalar, R, K> mine, eigens;
+  mjukf::detail::weightColumns(points, weights, mine);
+  eigens = points * weights.asDiagonal();
+  EXPECT_EQ(mine, eigens) << R << " x " << K;
+  mjukf::detail::deviationsFrom(points, center, mine);
+  eigens = points.colwise() - center;
+  EXPECT_EQ(mine, eigens) << R << " x " << K;
+}
+
+TEST(LinearAlgebra, ColumnMapsAreEigensExpressionsBitForBit) {
+  std::mt19937_64 rng(19);
+  expectColumnMapsAreEigens<double, 1, 9>(rng);
+  expectColumnMapsAreEigens<double, 3, 7>(rng);
+  expectColumnMapsAreEigens<double, 4, 9>(rng);
+  expectColumnMapsAreEigens<double, 33, 67>(rng);
+  expectColumnMapsAreEigens<float, 1, 5>(rng);
+  expectColumnMapsAreEigens<float, 6, 13>(rng);
+  expectColumnMapsAreEigens<float, 17, 35>(rng);
+}
+
 // On x86-64 without FMA, where Eigen's GEMM kernel sums every entry in order of k with one accumulator,
 // as productWithTranspose does: the same bits as Eigen's product (the claim in linear_algebra.hpp).
 #if defined(__x86_64__) && !defined(__FMA__)

@@ -96,9 +96,19 @@ const char* name(Variant v) {
   return "?";
 }
 
+// The dual filter's reset also takes P^θ; the JUKF's and MJUKF's take θ̂ only (their parameterCovariance()
+// is read, not set).
+template <class F, class = void>
+struct ResetsParamCov : std::false_type {};
+template <class F>
+struct ResetsParamCov<F, std::void_t<decltype(std::declval<F&>().reset(
+                             std::declval<const F&>().state(), std::declval<const F&>().covariance(),
+                             std::declval<const F&>().parameters(), std::declval<const F&>().parameterCovariance()))>>
+    : std::true_type {};
+
 template <class F>
 void resetHalfway(F& f) {
-  if constexpr (HasParamCov<F>::value)
+  if constexpr (ResetsParamCov<F>::value)
     (void)f.reset(f.state(), f.covariance(), f.parameters(), f.parameterCovariance());
   else
     (void)f.reset(f.state(), f.covariance(), f.parameters());

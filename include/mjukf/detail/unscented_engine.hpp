@@ -404,7 +404,7 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
   template <bool MayRaise = true>
   void predict(const Matrix& processNoise, const Matrix* floor = nullptr) {
     weightedMean(workPoints(), sigmaPoints_.meanWeights(), candidateMean_);
-    deviations_.noalias() = workPoints().colwise() - candidateMean_;
+    deviationsFrom(workPoints(), candidateMean_, deviations_);
     deviationsHold_ = Deviations::OfWorkPoints;
     if constexpr (SquareRoot) {
       sr().predictedMean = candidateMean_;
@@ -494,12 +494,12 @@ class Estimate : private SquareRootPart<Scalar, L, M, PointSet::template Set<Sca
     Diagnostics& d = candidateDiagnostics_;
     MeasVector predictedMeasurement;
     weightedMean(measured, sigmaPoints_.meanWeights(), predictedMeasurement);  // ŷ
-    measurementDeviations_.noalias() = measured.colwise() - predictedMeasurement;
+    deviationsFrom(measured, predictedMeasurement, measurementDeviations_);
     // Δχᵢ = χᵢ⁺ − x̂⁻: still in deviations_ when these are the committed points about the committed mean
     // as the time update formed them (its predict(), and a mean no policy moved since).
     const bool formed =
         deviationsHold_ == Deviations::OfCommittedPoints && &points == &this->points() && &prior.mean == &mean_;
-    if (!formed) deviations_.noalias() = points.colwise() - prior.mean;
+    if (!formed) deviationsFrom(points, prior.mean, deviations_);
     deviationsHold_ = Deviations::Other;  // the square-root posterior writes Δχᵢ − K ΔYᵢ here
     const auto& weights = sigmaPoints_.covarianceWeights();
     if constexpr (!SquareRoot) {
