@@ -445,13 +445,25 @@ void mapColumns(const Eigen::MatrixBase<A>& a, Eigen::MatrixBase<Out>& out, Op o
   }
 }
 
+// Whether Eigen has no vector unit for Scalar (packets of one coefficient, as on a Cortex-M4F). There its
+// assignment loops store scalars, which cannot alias the expression's addresses, and unroll the rows of
+// the filters' sizes, while mapColumns's loops are not unrolled at -O2: on the firmware's float robot
+// mapColumns took 2–2.4 % more instructions per measurement step (scripts/embedded.sh --figures), so
+// weightColumns and deviationsFrom keep Eigen's expressions there.
+template <class Scalar>
+inline constexpr bool kScalarPackets = Eigen::internal::packet_traits<Scalar>::size == 1;
+
 // out = a W, i.e. out(:, k) = Wₖ a(:, k): each product as Eigen's a * weights.asDiagonal() forms it.
 template <class A, class Weights, class Out>
 void weightColumns(const Eigen::MatrixBase<A>& a, const Eigen::MatrixBase<Weights>& weights,
                    Eigen::MatrixBase<Out>& out) {
-  const auto* w = weights.derived().data();
-  mapColumns(a, out,
-             [w](auto x, int, int k) { return Eigen::internal::pmul(x, Eigen::internal::pset1<decltype(x)>(w[k])); });
+  if constexpr (kScalarPackets<typename Out::Scalar>) {
+    out.noalias() = a * weights.asDiagonal();
+  } else {
+    const auto* w = weights.derived().data();
+    mapColumns(a, out,
+               [w](auto x, int, int k) { return Eigen::internal::pmul(x, Eigen::internal::pset1<decltype(x)>(w[k])); });
+  }
 }
 
 // out(:, k) = points(:, k) − center: the deviations of a point set, as Eigen's points.colwise() − center
@@ -459,9 +471,14 @@ void weightColumns(const Eigen::MatrixBase<A>& a, const Eigen::MatrixBase<Weight
 template <class Points, class Center, class Out>
 void deviationsFrom(const Eigen::MatrixBase<Points>& points, const Eigen::MatrixBase<Center>& center,
                     Eigen::MatrixBase<Out>& out) {
-  const auto* c = center.derived().data();
-  mapColumns(points, out,
-             [c](auto x, int i, int) { return Eigen::internal::psub(x, Eigen::internal::ploadu<decltype(x)>(c + i)); });
+  if constexpr (kScalarPackets<typename Out::Scalar>) {
+    out.noalias() = points.colwise() - center;
+  } else {
+    const auto* c = center.derived().data();
+    mapColumns(points, out, [c](auto x, int i, int) {
+      return Eigen::internal::psub(x, Eigen::internal::ploadu<decltype(x)>(c + i));
+    });
+  }
 }
 
 // ---- Weighted moments of a point set (the unscented transform, docs/algorithms.md §2–3) ---------------------
