@@ -428,10 +428,12 @@ void mapColumns(const Eigen::MatrixBase<A>& a, Eigen::MatrixBase<Out>& out, Op o
   static_assert(
       R != Eigen::Dynamic && K != Eigen::Dynamic && R == Out::RowsAtCompileTime && K == Out::ColsAtCompileTime,
       "mapColumns: fixed sizes, A and out alike");
-  // Column-major, or a single row (which Eigen stores row-major: its columns are its coefficients).
+  // Column-major with contiguous columns, or a single row (which Eigen stores row-major: its columns are
+  // its coefficients, innerStride() apart).
   static_assert((!(A::Flags & Eigen::RowMajorBit) || R == 1) && (!(Out::Flags & Eigen::RowMajorBit) || R == 1) &&
-                    (A::Flags & Eigen::DirectAccessBit) && (Out::Flags & Eigen::DirectAccessBit),
-                "mapColumns: column-major operands held in memory");
+                    (A::Flags & Eigen::DirectAccessBit) && (Out::Flags & Eigen::DirectAccessBit) &&
+                    (R == 1 || (int(A::InnerStrideAtCompileTime) == 1 && int(Out::InnerStrideAtCompileTime) == 1)),
+                "mapColumns: column-major operands held in memory, with contiguous columns");
   const Scalar* from = a.derived().data();
   Scalar* to = out.derived().data();
   const Eigen::Index strideA = R == 1 ? a.derived().innerStride() : a.derived().outerStride();
