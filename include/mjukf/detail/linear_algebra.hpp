@@ -416,18 +416,18 @@ void productWithTranspose(const Eigen::MatrixBase<A>& a, const Eigen::MatrixBase
 // packets through raw pointers (op takes a packet of rows i … i + P − 1, or one coefficient, and is
 // written with Eigen's packet functions, which take a scalar as a packet of one). Eigen's own assignment
 // loop for such a map, once the matrix is too large to unroll, reloads its operands' addresses after
-// every store (a packet store may alias anything): about ten instructions a packet (perf, the chain's
-// JUKF at n = 32: 9 % of a step in the deviations and the weighted deviations). The same operations on
-// the same values: the same bits.
+// every packet it stores (a packet store may alias anything), and it forms colwise() − v without packets
+// at all (docs/performance.md, "Issue 21: the deviations and the weighted deviations through raw
+// pointers"). The same operations on the same values: the same bits.
 template <class A, class Out, class Op>
 void mapColumns(const Eigen::MatrixBase<A>& a, Eigen::MatrixBase<Out>& out, Op op) {
   using Scalar = typename Out::Scalar;
   using Packet = typename Eigen::internal::packet_traits<Scalar>::type;
   constexpr int kPacket = Eigen::internal::packet_traits<Scalar>::size;
   constexpr int R = A::RowsAtCompileTime, K = A::ColsAtCompileTime;
-  static_assert(
-      R != Eigen::Dynamic && K != Eigen::Dynamic && R == Out::RowsAtCompileTime && K == Out::ColsAtCompileTime,
-      "mapColumns: fixed sizes, A and out alike");
+  static_assert(R != Eigen::Dynamic && K != Eigen::Dynamic && R == Out::RowsAtCompileTime &&
+                    K == Out::ColsAtCompileTime && std::is_same_v<typename A::Scalar, Scalar>,
+                "mapColumns: fixed sizes and one scalar type, A and out alike");
   // Column-major with contiguous columns, or a single row (which Eigen stores row-major: its columns are
   // its coefficients, innerStride() apart).
   static_assert((!(A::Flags & Eigen::RowMajorBit) || R == 1) && (!(Out::Flags & Eigen::RowMajorBit) || R == 1) &&
@@ -449,9 +449,9 @@ void mapColumns(const Eigen::MatrixBase<A>& a, Eigen::MatrixBase<Out>& out, Op o
 
 // Whether Eigen has no vector unit for Scalar (packets of one coefficient, as on a Cortex-M4F). There its
 // assignment loops store scalars, which cannot alias the expression's addresses, and unroll the rows of
-// the filters' sizes, while mapColumns's loops are not unrolled at -O2: on the firmware's float robot
-// mapColumns took 2–2.4 % more instructions per measurement step (scripts/embedded.sh --figures), so
-// weightColumns and deviationsFrom keep Eigen's expressions there.
+// the filters' sizes, while mapColumns's loops are not unrolled at -O2 and took more instructions
+// (docs/embedded.md, "The deviations by packets, on the target"): weightColumns and deviationsFrom keep
+// Eigen's expressions there.
 template <class Scalar>
 inline constexpr bool kScalarPackets = Eigen::internal::packet_traits<Scalar>::size == 1;
 
@@ -462,7 +462,10 @@ void weightColumns(const Eigen::MatrixBase<A>& a, const Eigen::MatrixBase<Weight
   if constexpr (kScalarPackets<typename Out::Scalar>) {
     out.noalias() = a * weights.asDiagonal();
   } else {
-    const auto* w = weights.derived().data();
+    static_assert(int(Weights::SizeAtCompileTime) == int(Out::ColsAtCompileTime),
+                  "weightColumns: one weight per column");
+    const typename Weights::PlainObject& plain = weights.derived();  // contiguous (no copy when it is already)
+    const auto* w = plain.data();
     mapColumns(a, out,
                [w](auto x, int, int k) { return Eigen::internal::pmul(x, Eigen::internal::pset1<decltype(x)>(w[k])); });
   }
@@ -476,7 +479,10 @@ void deviationsFrom(const Eigen::MatrixBase<Points>& points, const Eigen::Matrix
   if constexpr (kScalarPackets<typename Out::Scalar>) {
     out.noalias() = points.colwise() - center;
   } else {
-    const auto* c = center.derived().data();
+    static_assert(int(Center::SizeAtCompileTime) == int(Out::RowsAtCompileTime),
+                  "deviationsFrom: a centre of the points' rows");
+    const typename Center::PlainObject& plain = center.derived();  // contiguous (no copy when it is already)
+    const auto* c = plain.data();
     mapColumns(points, out, [c](auto x, int i, int) {
       return Eigen::internal::psub(x, Eigen::internal::ploadu<decltype(x)>(c + i));
     });
