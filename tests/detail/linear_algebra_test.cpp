@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include "mjukf/detail/linear_algebra.hpp"
+#include "mjukf/unscented_transform.hpp"
 #include "test_support.hpp"
 
 namespace {
@@ -283,6 +284,37 @@ void expectColumnMapsAreEigens(std::mt19937_64& rng) {
   EXPECT_TRUE(sameBytes(mine, deviations)) << R << " x " << K;
   mjukf::detail::deviationsFrom(points, center, inner);
   EXPECT_TRUE(sameBytes(inner, deviations) && untouched()) << R << " x " << K << ", block";
+}
+
+// Weights and a centre that are not plain vectors (a row of a matrix, transposed: its coefficients are
+// apart in memory; an expression) are read as their values, as Eigen's expressions read them. A first
+// version read them as contiguous memory and gave a wrong covariance through the public
+// unscentedCovarianceFromDeviations at L ≥ 9, where the weighted sums take weightColumns.
+TEST(LinearAlgebra, ColumnMapsReadStridedWeightsAndCentresByValue) {
+  constexpr int L = 12, Count = 2 * L + 1;
+  std::mt19937_64 rng(20);
+  std::normal_distribution<double> normal;
+  Eigen::Matrix<double, L, Count> d;
+  Eigen::Matrix<double, 2, Count> weightRows;
+  Eigen::Matrix<double, 2, L> centreRows;
+  for (double& v : d.reshaped()) v = normal(rng);
+  for (double& v : weightRows.reshaped()) v = normal(rng);
+  for (double& v : centreRows.reshaped()) v = normal(rng);
+  const Eigen::Matrix<double, Count, 1> weights = weightRows.row(1).transpose();
+  const Eigen::Matrix<double, L, 1> centre = centreRows.row(1).transpose();
+  Eigen::Matrix<double, L, Count> fromPlain, fromStrided;
+  mjukf::detail::weightColumns(d, weights, fromPlain);
+  mjukf::detail::weightColumns(d, weightRows.row(1).transpose(), fromStrided);
+  EXPECT_EQ(fromStrided, fromPlain);
+  mjukf::detail::weightColumns(d, 2 * weights, fromStrided);
+  EXPECT_EQ(fromStrided, (d * (2 * weights).asDiagonal()).eval());
+  mjukf::detail::deviationsFrom(d, centre, fromPlain);
+  mjukf::detail::deviationsFrom(d, centreRows.row(1).transpose(), fromStrided);
+  EXPECT_EQ(fromStrided, fromPlain);
+  Eigen::Matrix<double, L, L> plain, strided;
+  mjukf::unscentedCovarianceFromDeviations(d, d, weights, plain);
+  mjukf::unscentedCovarianceFromDeviations(d, d, weightRows.row(1).transpose(), strided);
+  EXPECT_EQ(strided, plain);
 }
 
 TEST(LinearAlgebra, ColumnMapsAreEigensExpressionsBitForBit) {
