@@ -282,7 +282,7 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
     const auto& set = estimate_.sigmaPoints();
     Eigen::Matrix<Scalar, Out::RowsAtCompileTime, 1> mean;
     weightedMean(images, set.meanWeights(), mean);
-    parameterDeviations_.noalias() = thetas.colwise() - center;
+    deviationsFrom(thetas, center, parameterDeviations_);
     Eigen::Matrix<Scalar, ParamDim, Out::RowsAtCompileTime> transposed;
     weightedOuterSum(parameterDeviations_, images.colwise() - mean, set.covarianceWeights(), transposed);
     solveLowerInPlace(lowerFactor, transposed);  // P⁻¹ Σ … = S⁻ᵀ S⁻¹ Σ …
@@ -410,7 +410,7 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
     if (!allFinite(stateMeasured_)) return Status::NonFiniteResult;
     Meas mean;
     weightedMean(stateMeasured_, est.sigmaPoints().meanWeights(), mean);
-    stateMeasured_.colwise() -= mean;
+    deviationsFrom(stateMeasured_, mean, stateMeasured_);  // in place: each coefficient read before it is written
     weightedCovariance(stateMeasured_, est.sigmaPoints().covarianceWeights(), observationNoise_);
     observationNoise_ += engine.settings().measurementNoise;
     return Status::Ok;

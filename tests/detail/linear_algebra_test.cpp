@@ -284,6 +284,9 @@ void expectColumnMapsAreEigens(std::mt19937_64& rng) {
   EXPECT_TRUE(sameBytes(mine, deviations)) << R << " x " << K;
   mjukf::detail::deviationsFrom(points, center, inner);
   EXPECT_TRUE(sameBytes(inner, deviations) && untouched()) << R << " x " << K << ", block";
+  Points inPlace = points;  // as the dual UKF forms its measurement deviations
+  mjukf::detail::deviationsFrom(inPlace, center, inPlace);
+  EXPECT_TRUE(sameBytes(inPlace, deviations)) << R << " x " << K << ", in place";
 }
 
 // Weights and a centre that are not plain vectors (a row of a matrix, transposed: its coefficients are

@@ -311,6 +311,21 @@ void symmetrize(Matrix& p) {
     for (int r = c + 1; r < p.rows(); ++r) p(r, c) = p(c, r) = Scalar(0.5) * p(r, c) + Scalar(0.5) * p(c, r);
 }
 
+// ---- Fixed-size operands read through raw pointers ----------------------------------------------------------
+
+// Whether M's columns lie in memory as runs of contiguous coefficients: column-major with unit inner
+// stride, or a single row (which Eigen stores row-major: its columns are its coefficients). The kernels
+// below read column k of such an M at data() + k · columnStride(m).
+template <class M>
+inline constexpr bool kContiguousColumns = bool(M::Flags& Eigen::DirectAccessBit) &&
+                                           (M::RowsAtCompileTime == 1 || (!(M::Flags & Eigen::RowMajorBit) &&
+                                                                          int(M::InnerStrideAtCompileTime) == 1));
+
+template <class M>
+Eigen::Index columnStride(const Eigen::MatrixBase<M>& m) {
+  return M::RowsAtCompileTime == 1 ? m.derived().innerStride() : m.derived().outerStride();
+}
+
 // ---- A register-blocked product with a transpose (the general forms below) --------------------------------
 
 enum class ProductPart { Full, Lower };       // every entry of out, or its lower triangle i ≥ j only
@@ -334,15 +349,13 @@ void productWithTranspose(const Eigen::MatrixBase<A>& a, const Eigen::MatrixBase
   constexpr int R = A::RowsAtCompileTime, C = B::RowsAtCompileTime, K = A::ColsAtCompileTime;
   static_assert(R != Eigen::Dynamic && C != Eigen::Dynamic && K == B::ColsAtCompileTime,
                 "productWithTranspose: fixed sizes, A and B with the same number of columns");
-  // Column-major, or a single row (which Eigen stores row-major: the blocks of rows below never run on it).
-  static_assert((!(A::Flags & Eigen::RowMajorBit) || R == 1) && (!(B::Flags & Eigen::RowMajorBit) || C == 1) &&
-                    (A::Flags & Eigen::DirectAccessBit) && (B::Flags & Eigen::DirectAccessBit),
-                "productWithTranspose: column-major operands held in memory");
+  static_assert(kContiguousColumns<A> && kContiguousColumns<B>,
+                "productWithTranspose: column-major operands held in memory, with contiguous columns");
   const Scalar* pa = a.derived().data();
   const Scalar* pb = b.derived().data();
   // a(i, k) = pa[i + k strideA] (i = 0 only for a single row), and so for b.
-  const Eigen::Index strideA = R == 1 ? a.derived().innerStride() : a.derived().outerStride();
-  const Eigen::Index strideB = C == 1 ? b.derived().innerStride() : b.derived().outerStride();
+  const Eigen::Index strideA = columnStride(a);
+  const Eigen::Index strideB = columnStride(b);
   const auto put = [&](int i, int j, Scalar sum) {
     if (Part == ProductPart::Lower && i < j) return;
     if constexpr (Into == ProductInto::Assign)
@@ -428,16 +441,12 @@ void mapColumns(const Eigen::MatrixBase<A>& a, Eigen::MatrixBase<Out>& out, Op o
   static_assert(R != Eigen::Dynamic && K != Eigen::Dynamic && R == Out::RowsAtCompileTime &&
                     K == Out::ColsAtCompileTime && std::is_same_v<typename A::Scalar, Scalar>,
                 "mapColumns: fixed sizes and one scalar type, A and out alike");
-  // Column-major with contiguous columns, or a single row (which Eigen stores row-major: its columns are
-  // its coefficients, innerStride() apart).
-  static_assert((!(A::Flags & Eigen::RowMajorBit) || R == 1) && (!(Out::Flags & Eigen::RowMajorBit) || R == 1) &&
-                    (A::Flags & Eigen::DirectAccessBit) && (Out::Flags & Eigen::DirectAccessBit) &&
-                    (R == 1 || (int(A::InnerStrideAtCompileTime) == 1 && int(Out::InnerStrideAtCompileTime) == 1)),
+  static_assert(kContiguousColumns<A> && kContiguousColumns<Out>,
                 "mapColumns: column-major operands held in memory, with contiguous columns");
   const Scalar* from = a.derived().data();
   Scalar* to = out.derived().data();
-  const Eigen::Index strideA = R == 1 ? a.derived().innerStride() : a.derived().outerStride();
-  const Eigen::Index strideOut = R == 1 ? out.derived().innerStride() : out.derived().outerStride();
+  const Eigen::Index strideA = columnStride(a);
+  const Eigen::Index strideOut = columnStride(out);
   constexpr int packed = R / kPacket * kPacket;
   for (int k = 0; k < K; ++k, from += strideA, to += strideOut) {
     int i = 0;
@@ -454,6 +463,12 @@ void mapColumns(const Eigen::MatrixBase<A>& a, Eigen::MatrixBase<Out>& out, Op o
 // Eigen's expressions there.
 template <class Scalar>
 inline constexpr bool kScalarPackets = Eigen::internal::packet_traits<Scalar>::size == 1;
+// There, for L = Count / 2 from kLazyWeightingFrom to kLazyWeightingTo, the covariance kernel forms d W
+// in each column's product instead of holding it (weightedCovarianceLowerLazilyWeighted; docs/embedded.md,
+// "The covariance kernel by size on the target"). The general kernels take over from L = 9; were their
+// sizes moved, L = 9–13 would still be left out: there Eigen unrolls the held form's sums, which it adds
+// pairwise, and not the lazy form's, which it adds in order, and the two would round apart.
+inline constexpr int kLazyWeightingFrom = 6, kLazyWeightingTo = 8;
 
 // out = a W, i.e. out(:, k) = Wₖ a(:, k): each product as Eigen's a * weights.asDiagonal() forms it.
 template <class A, class Weights, class Out>
@@ -578,6 +593,16 @@ void weightedCovarianceLowerCoefficientwise(const Eigen::MatrixBase<Dev>& d, con
     out.col(c).tail(rows).noalias() = weighted.bottomRows(rows).lazyProduct(d.row(c).transpose());
   });
 }
+// The same sums with d W formed again in each column's product rather than held: without the N × (2L + 1)
+// temporary on the stack, for more multiplications; the same products, added in the same order where Eigen
+// unrolls both forms' sums or neither (kLazyWeightingTo).
+template <class Dev, class Weights, class Out>
+void weightedCovarianceLowerLazilyWeighted(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase<Weights>& weights,
+                                           Eigen::MatrixBase<Out>& out) {
+  forEachLowerColumn<Dev::RowsAtCompileTime>([&](auto c, auto rows) {
+    out.col(c).tail(rows).noalias() = (d.bottomRows(rows) * weights.asDiagonal()).lazyProduct(d.row(c).transpose());
+  });
+}
 template <class Dev, class Weights, class Out>
 void weightedCovarianceLowerTriangle(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase<Weights>& weights,
                                      Eigen::MatrixBase<Out>& out) {
@@ -589,6 +614,8 @@ void weightedCovarianceLower(const Eigen::MatrixBase<Dev>& d, const Eigen::Matri
   constexpr int L = Dev::ColsAtCompileTime / 2;
   if constexpr (atLeast<L>(generalKernelsFrom<typename Out::Scalar>.covarianceProduct))
     weightedCovarianceLowerTriangle(d, weights, out);
+  else if constexpr (kScalarPackets<typename Out::Scalar> && kLazyWeightingFrom <= L && L <= kLazyWeightingTo)
+    weightedCovarianceLowerLazilyWeighted(d, weights, out);
   else
     weightedCovarianceLowerCoefficientwise(d, weights, out);
 }

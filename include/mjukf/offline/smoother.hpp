@@ -178,8 +178,8 @@ SmootherOutcome smooth(const Filter& filter, const DataSet<typename Filter::Mode
     if (!mjukf::detail::allFinite(propagated)) return {Status::NonFiniteResult, k};
 
     mjukf::detail::weightedMean(propagated, weightsMean, predictedMean);
-    propagatedDeviations = propagated.colwise() - predictedMean;
-    drawnDeviations = drawn.colwise() - mean;
+    mjukf::detail::deviationsFrom(propagated, predictedMean, propagatedDeviations);
+    mjukf::detail::deviationsFrom(drawn, mean, drawnDeviations);
     mjukf::detail::weightedOuterSum(propagatedDeviations, propagatedDeviations, weightsCov, predictedCovariance);
     predictedCovariance += processNoise;
     mjukf::detail::symmetrize(predictedCovariance);

@@ -1,0 +1,54 @@
+// detail/linear_algebra.hpp where Eigen has no vector unit (a packet is one coefficient, as on the
+// Cortex-M4F of the firmware), built here with EIGEN_DONT_VECTORIZE: the kernels chosen for that case
+// give the bits of the forms they replace.
+
+#include <cstring>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "mjukf/detail/linear_algebra.hpp"
+
+namespace {
+
+static_assert(mjukf::detail::kScalarPackets<float> && mjukf::detail::kScalarPackets<double>,
+              "this test is built without Eigen's vectorisation");
+
+// The lower triangle of Σ Wcᵢ dᵢ dᵢᵀ by the kernel weightedCovarianceLower chooses for a point set of
+// L = Count / 2 below the general kernels' sizes, and by the coefficient-wise form that holds d W,
+// compared as bytes. From kLazyWeightingFrom on the former weights d again in each column's product;
+// below, the two are one form.
+template <class Scalar, int N, int Count>
+void expectChosenCovarianceIsTheHeldOne(std::mt19937_64& rng) {
+  std::normal_distribution<double> normal;
+  Eigen::Matrix<Scalar, N, Count> d;
+  Eigen::Matrix<Scalar, Count, 1> w;
+  for (Scalar& v : d.reshaped()) v = Scalar(normal(rng));
+  for (Scalar& v : w.reshaped()) v = Scalar(normal(rng));
+  Eigen::Matrix<Scalar, N, N> held = Eigen::Matrix<Scalar, N, N>::Zero(), chosen = held;
+  mjukf::detail::weightedCovarianceLowerCoefficientwise(d, w, held);
+  mjukf::detail::weightedCovarianceLower(d, w, chosen);
+  for (int j = 0; j < N; ++j)
+    for (int i = j; i < N; ++i)
+      EXPECT_EQ(std::memcmp(&chosen(i, j), &held(i, j), sizeof(Scalar)), 0)
+          << N << " x " << Count << " at " << i << ", " << j;
+  EXPECT_TRUE((chosen.template triangularView<Eigen::StrictlyUpper>().toDenseMatrix().array() == 0).all());
+}
+
+template <class Scalar, int L>
+void expectChosenCovariancesAreTheHeldOnes(std::mt19937_64& rng) {
+  expectChosenCovarianceIsTheHeldOne<Scalar, L, 2 * L + 1>(rng);  // P⁻ of a joint filter
+  expectChosenCovarianceIsTheHeldOne<Scalar, 4, 2 * L + 1>(rng);  // P_yy of four measurements
+}
+
+TEST(ScalarPackets, CovarianceKernelChosenBySizeHasTheHeldFormsBits) {
+  std::mt19937_64 rng(21);
+  expectChosenCovariancesAreTheHeldOnes<float, 4>(rng);
+  expectChosenCovariancesAreTheHeldOnes<float, 6>(rng);  // the robot's JUKF
+  expectChosenCovariancesAreTheHeldOnes<float, 7>(rng);
+  expectChosenCovariancesAreTheHeldOnes<float, 8>(rng);
+  expectChosenCovariancesAreTheHeldOnes<double, 6>(rng);
+  expectChosenCovariancesAreTheHeldOnes<double, 8>(rng);
+}
+
+}  // namespace
