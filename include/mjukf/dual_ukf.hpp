@@ -410,7 +410,8 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
     if (!allFinite(stateMeasured_)) return Status::NonFiniteResult;
     Meas mean;
     weightedMean(stateMeasured_, est.sigmaPoints().meanWeights(), mean);
-    deviationsFrom(stateMeasured_, mean, stateMeasured_);  // in place: each coefficient read before it is written
+    // In place: each coefficient is read before it is written (the centre, a local, aliases nothing).
+    deviationsFrom(stateMeasured_, mean, stateMeasured_);
     weightedCovariance(stateMeasured_, est.sigmaPoints().covarianceWeights(), observationNoise_);
     observationNoise_ += engine.settings().measurementNoise;
     return Status::Ok;

@@ -17,7 +17,7 @@ static_assert(mjukf::detail::kScalarPackets<float> && mjukf::detail::kScalarPack
 // The lower triangle of Σ Wcᵢ dᵢ dᵢᵀ by the kernel weightedCovarianceLower chooses for a point set of
 // L = Count / 2 below the general kernels' sizes, and by the coefficient-wise form that holds d W,
 // compared as bytes. From kLazyWeightingFrom on the former weights d again in each column's product;
-// below, the two are one form.
+// below (L = 4 here), the two are one form.
 template <class Scalar, int N, int Count>
 void expectChosenCovarianceIsTheHeldOne(std::mt19937_64& rng) {
   std::normal_distribution<double> normal;
@@ -49,6 +49,21 @@ TEST(ScalarPackets, CovarianceKernelChosenBySizeHasTheHeldFormsBits) {
   expectChosenCovariancesAreTheHeldOnes<float, 8>(rng);
   expectChosenCovariancesAreTheHeldOnes<double, 6>(rng);
   expectChosenCovariancesAreTheHeldOnes<double, 8>(rng);
+}
+
+// Where packets are one coefficient, deviationsFrom is Eigen's expression; in place (the dual UKF's
+// measurement deviations) it gives what colwise() −= gives, byte for byte.
+TEST(ScalarPackets, DeviationsInPlaceAreColwiseSubtraction) {
+  std::mt19937_64 rng(23);
+  std::normal_distribution<double> normal;
+  Eigen::Matrix<float, 4, 9> points;
+  Eigen::Matrix<float, 4, 1> centre;
+  for (float& v : points.reshaped()) v = float(normal(rng));
+  for (float& v : centre.reshaped()) v = float(normal(rng));
+  Eigen::Matrix<float, 4, 9> expected = points;
+  expected.colwise() -= centre;
+  mjukf::detail::deviationsFrom(points, centre, points);
+  EXPECT_EQ(std::memcmp(points.data(), expected.data(), sizeof(points)), 0);
 }
 
 }  // namespace

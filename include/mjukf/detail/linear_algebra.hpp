@@ -317,7 +317,7 @@ void symmetrize(Matrix& p) {
 // stride, or a single row (which Eigen stores row-major: its columns are its coefficients). The kernels
 // below read column k of such an M at data() + k · columnStride(m).
 template <class M>
-inline constexpr bool kContiguousColumns = bool(M::Flags& Eigen::DirectAccessBit) &&
+inline constexpr bool kContiguousColumns = (M::Flags & Eigen::DirectAccessBit) != 0 &&
                                            (M::RowsAtCompileTime == 1 || (!(M::Flags & Eigen::RowMajorBit) &&
                                                                           int(M::InnerStrideAtCompileTime) == 1));
 
@@ -465,10 +465,18 @@ template <class Scalar>
 inline constexpr bool kScalarPackets = Eigen::internal::packet_traits<Scalar>::size == 1;
 // There, for L = Count / 2 from kLazyWeightingFrom to kLazyWeightingTo, the covariance kernel forms d W
 // in each column's product instead of holding it (weightedCovarianceLowerLazilyWeighted; docs/embedded.md,
-// "The covariance kernel by size on the target"). The general kernels take over from L = 9; were their
-// sizes moved, L = 9–13 would still be left out: there Eigen unrolls the held form's sums, which it adds
-// pairwise, and not the lazy form's, which it adds in order, and the two would round apart.
+// "The covariance kernel by size on the target"): below, forming d W again costs more than the stack it
+// saves. Above, the general kernels take over from L = 9; were their sizes moved, L = 9–13 would still
+// be left out: there Eigen unrolls the held form's sums, which it adds pairwise, and not the lazy form's,
+// which it adds in order, and the two would round apart. Which sums Eigen unrolls depends on its
+// unrolling limit, so the range holds for its default only (another EIGEN_UNROLLING_LIMIT keeps the held
+// form).
 inline constexpr int kLazyWeightingFrom = 6, kLazyWeightingTo = 8;
+template <class Scalar, int L>
+constexpr bool lazyWeighting() {
+  constexpr bool eigensDefaultUnrolling = EIGEN_UNROLLING_LIMIT == 110;
+  return kScalarPackets<Scalar> && eigensDefaultUnrolling && kLazyWeightingFrom <= L && L <= kLazyWeightingTo;
+}
 
 // out = a W, i.e. out(:, k) = Wₖ a(:, k): each product as Eigen's a * weights.asDiagonal() forms it.
 template <class A, class Weights, class Out>
@@ -614,7 +622,7 @@ void weightedCovarianceLower(const Eigen::MatrixBase<Dev>& d, const Eigen::Matri
   constexpr int L = Dev::ColsAtCompileTime / 2;
   if constexpr (atLeast<L>(generalKernelsFrom<typename Out::Scalar>.covarianceProduct))
     weightedCovarianceLowerTriangle(d, weights, out);
-  else if constexpr (kScalarPackets<typename Out::Scalar> && kLazyWeightingFrom <= L && L <= kLazyWeightingTo)
+  else if constexpr (lazyWeighting<typename Out::Scalar, L>())
     weightedCovarianceLowerLazilyWeighted(d, weights, out);
   else
     weightedCovarianceLowerCoefficientwise(d, weights, out);
