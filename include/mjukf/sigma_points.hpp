@@ -31,7 +31,7 @@ struct SigmaPointParameters {
 
 /// What every symmetric sigma-point set shares: `Count` points x̂ ± γ Sᵢ for the columns Sᵢ of the lower
 /// Cholesky factor of P (with x̂ itself first when `Center`), their mean and covariance weights, and
-/// drawing them without allocating (the Cholesky workspace is a member). A set derives from it and
+/// drawing them without allocating. A set derives from it and
 /// fills the weights and γ at construction: `MerweScaledSigmaPoints`, `CubatureSigmaPoints`.
 template <class Scalar_, int L, bool Center>
 class SymmetricSigmaPointSet {
@@ -58,10 +58,12 @@ class SymmetricSigmaPointSet {
   /// Writes the points of (mean, cov) into `points`: the mean (when `HasCenter`), then the mean plus
   /// and minus γ times the columns of the lower Cholesky factor of `cov` (only its lower triangle is
   /// read). Returns Status::NotPositiveDefinite, with `points` untouched, when `cov` has no factor or
-  /// is not finite.
-  Status generate(const Vector& mean, const Matrix& cov, Points& points) {
-    if (!detail::allFinite(cov) || !detail::choleskyLower(cov, factor_)) return Status::NotPositiveDefinite;
-    return generateFromFactor(mean, factor_, points);
+  /// is not finite. The factor is a local: a filter, which keeps its own factor and draws with
+  /// `generateFromFactor`, does not carry an L × L workspace it never uses.
+  Status generate(const Vector& mean, const Matrix& cov, Points& points) const {
+    Matrix factor;
+    if (!detail::allFinite(cov) || !detail::choleskyLower(cov, factor)) return Status::NotPositiveDefinite;
+    return generateFromFactor(mean, factor, points);
   }
 
   /// The same points from a lower Cholesky factor S of the covariance (cov = S Sᵀ) computed earlier:
@@ -87,15 +89,12 @@ class SymmetricSigmaPointSet {
   Weights meanWeights_ = Weights::Zero();        ///< Wmᵢ, set by the derived set
   Weights covarianceWeights_ = Weights::Zero();  ///< Wcᵢ, set by the derived set
   Scalar gamma_ = 0;                             ///< γ, set by the derived set
-
- private:
-  Matrix factor_ = Matrix::Zero();  // workspace of generate()
 };
 
 /// The 2L + 1 scaled sigma points of an L-dimensional Gaussian and their weights.
 ///
 /// The weights are computed once at construction; `generate` draws the points of a mean and
-/// covariance without allocating (the Cholesky workspace is a member).
+/// covariance without allocating.
 template <class Scalar_, int L>
 class MerweScaledSigmaPoints : public SymmetricSigmaPointSet<Scalar_, L, true> {
   using Base = SymmetricSigmaPointSet<Scalar_, L, true>;

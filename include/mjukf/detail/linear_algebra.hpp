@@ -23,6 +23,19 @@
 #include <Eigen/Jacobi>
 #include <Eigen/LU>
 
+// GCC and Clang: inline every call made in the function, recursively (what the compiler can see).
+// The propagation of the points is the bulk of a step, and left to its own budget the compiler keeps
+// the stepper, the model's derivative and Eigen's 4-vector assignments as separate calls there, which
+// costs a third more than the same arithmetic inlined (bench/: step against floor). The small weighted
+// sums below too: on the Cortex-M4F, -O2 kept each coefficient's sum as a call to Eigen's evaluator,
+// which built its arguments on the stack (docs/embedded.md). Not when optimising for size (-Os,
+// firmware): there the calls are what the build asked for.
+#if (defined(__GNUC__) || defined(__clang__)) && !defined(__OPTIMIZE_SIZE__)
+#define MJUKF_FLATTEN __attribute__((flatten))
+#else
+#define MJUKF_FLATTEN
+#endif
+
 namespace mjukf::detail {
 
 // ---- Kernels chosen by size ----------------------------------------------------------------------------
@@ -529,8 +542,9 @@ void weightedMean(const Eigen::MatrixBase<Points>& points, const Eigen::MatrixBa
 // product without its packing; a W is formed first, as Eigen's product forms it, and b is read in place
 // when it is a matrix (an expression is evaluated once).
 template <class DevA, class DevB, class Weights, class Out>
-void weightedOuterSumCoefficientwise(const Eigen::MatrixBase<DevA>& a, const Eigen::MatrixBase<DevB>& b,
-                                     const Eigen::MatrixBase<Weights>& weights, Eigen::MatrixBase<Out>& out) {
+MJUKF_FLATTEN void weightedOuterSumCoefficientwise(const Eigen::MatrixBase<DevA>& a, const Eigen::MatrixBase<DevB>& b,
+                                                   const Eigen::MatrixBase<Weights>& weights,
+                                                   Eigen::MatrixBase<Out>& out) {
   out.noalias() = (a * weights.asDiagonal()).lazyProduct(b.transpose());
 }
 // (a W) bᵀ into out (Part: all of it, or its lower triangle), by productWithTranspose.
@@ -593,8 +607,9 @@ void forEachLowerColumn(F&& f) {
 //    instructions than the latter at L = 20, 24, 28 and 36, but 2 % (double) and 14 % (float) more at
 //    32, the chain's n = 32: not taken.)
 template <class Dev, class Weights, class Out>
-void weightedCovarianceLowerCoefficientwise(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase<Weights>& weights,
-                                            Eigen::MatrixBase<Out>& out) {
+MJUKF_FLATTEN void weightedCovarianceLowerCoefficientwise(const Eigen::MatrixBase<Dev>& d,
+                                                          const Eigen::MatrixBase<Weights>& weights,
+                                                          Eigen::MatrixBase<Out>& out) {
   constexpr int N = Dev::RowsAtCompileTime;
   const Eigen::Matrix<typename Out::Scalar, N, Dev::ColsAtCompileTime> weighted = d * weights.asDiagonal();
   forEachLowerColumn<N>([&](auto c, auto rows) {
@@ -605,8 +620,9 @@ void weightedCovarianceLowerCoefficientwise(const Eigen::MatrixBase<Dev>& d, con
 // temporary on the stack, for more multiplications; the same products, added in the same order where Eigen
 // unrolls both forms' sums or neither (kLazyWeightingTo).
 template <class Dev, class Weights, class Out>
-void weightedCovarianceLowerLazilyWeighted(const Eigen::MatrixBase<Dev>& d, const Eigen::MatrixBase<Weights>& weights,
-                                           Eigen::MatrixBase<Out>& out) {
+MJUKF_FLATTEN void weightedCovarianceLowerLazilyWeighted(const Eigen::MatrixBase<Dev>& d,
+                                                         const Eigen::MatrixBase<Weights>& weights,
+                                                         Eigen::MatrixBase<Out>& out) {
   forEachLowerColumn<Dev::RowsAtCompileTime>([&](auto c, auto rows) {
     out.col(c).tail(rows).noalias() = (d.bottomRows(rows) * weights.asDiagonal()).lazyProduct(d.row(c).transpose());
   });

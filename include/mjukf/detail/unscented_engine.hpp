@@ -33,17 +33,6 @@
 #include "mjukf/sigma_points.hpp"
 #include "mjukf/status.hpp"
 
-// GCC and Clang: inline every call made in the function, recursively (what the compiler can see).
-// The propagation of the points is the bulk of a step, and left to its own budget the compiler keeps
-// the stepper, the model's derivative and Eigen's 4-vector assignments as separate calls there, which
-// costs a third more than the same arithmetic inlined (bench/: step against floor). Not when
-// optimising for size (-Os, firmware): there the calls are what the build asked for.
-#if (defined(__GNUC__) || defined(__clang__)) && !defined(__OPTIMIZE_SIZE__)
-#define MJUKF_FLATTEN __attribute__((flatten))
-#else
-#define MJUKF_FLATTEN
-#endif
-
 /// \cond INTERNAL
 // A function kept out of its callers, so that its frame does not join theirs.
 #if defined(_MSC_VER) && !defined(__clang__)
