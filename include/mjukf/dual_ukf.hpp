@@ -419,7 +419,7 @@ class DualParameters : public ParameterPolicy<Model, Integrator, Settings, Est> 
 
   // The members are in the order of their alignment, for a smaller object: Eigen aligns a fixed-size
   // matrix of a multiple of 16 bytes to 16, so the p-sized ones, the steps, the scalars and the flags
-  // come after the others (the float robot's policy: 1,808 → 1,760 B).
+  // come after the others (48 B less in the float robot's policy).
   ParameterEstimate estimate_;  // θ̂, P^θ, the θⱼ
   Eigen::Matrix<Scalar, MeasDim, MeasDim> observationNoise_ = decltype(observationNoise_)::Zero();  // of this step
   MeasurementGate<Scalar, MeasDim> noGate_;
