@@ -24,10 +24,12 @@
 #include <gtest/gtest.h>
 
 #include "mjukf/detail/linear_algebra.hpp"
+#include "random_matrix.hpp"
 
 namespace {
 
 namespace la = mjukf::detail;
+using mjukf::testing::randomNormal;
 
 template <class Scalar>
 constexpr double gamma(int k) {
@@ -35,19 +37,10 @@ constexpr double gamma(int k) {
   return k * u / (1 - k * u);
 }
 
-template <class Scalar, int Rows, int Cols>
-Eigen::Matrix<Scalar, Rows, Cols> randomMatrix(std::mt19937_64& rng, double sd = 1.0) {
-  std::normal_distribution<double> normal(0.0, sd);
-  Eigen::Matrix<Scalar, Rows, Cols> m;
-  for (int c = 0; c < Cols; ++c)
-    for (int r = 0; r < Rows; ++r) m(r, c) = Scalar(normal(rng));
-  return m;
-}
-
 // Random SPD matrix A = F Fᵀ + 0.1 N I, its condition number below a few hundred.
 template <class Scalar, int N>
 Eigen::Matrix<Scalar, N, N> randomSpd(std::mt19937_64& rng) {
-  const auto f = randomMatrix<double, N, N>(rng);
+  const auto f = randomNormal<Eigen::Matrix<double, N, N>>(rng);
   const Eigen::Matrix<double, N, N> a = f * f.transpose() + 0.1 * N * Eigen::Matrix<double, N, N>::Identity();
   return a.template cast<Scalar>();
 }
@@ -65,8 +58,8 @@ Eigen::Matrix<Scalar, Count, 1> weights() {
 template <class Scalar, int L>
 void expectOuterSumsAgree(std::mt19937_64& rng) {
   constexpr int Count = 2 * L + 1, M = (L + 1) / 2;
-  const auto d = randomMatrix<Scalar, L, Count>(rng);
-  const auto e = randomMatrix<Scalar, M, Count>(rng);
+  const auto d = randomNormal<Eigen::Matrix<Scalar, L, Count>>(rng);
+  const auto e = randomNormal<Eigen::Matrix<Scalar, M, Count>>(rng);
   const auto w = weights<Scalar, Count>();
   Eigen::Matrix<Scalar, L, L> old, lower, gemm, triangle, chosen;
   la::weightedOuterSumCoefficientwise(d, d, w, old);
@@ -107,7 +100,7 @@ template <class Scalar, int L>
 void expectSubtractionsAgree(std::mt19937_64& rng) {
   constexpr int M = (L + 1) / 2;
   const Eigen::Matrix<Scalar, L, L> p = randomSpd<Scalar, L>(rng);
-  const auto u = randomMatrix<Scalar, L, M>(rng, 0.1);
+  const auto u = randomNormal<Eigen::Matrix<Scalar, L, M>>(rng, 0.1);
   Eigen::Matrix<Scalar, L, L> old = p, rank = p, chosen = p;
   la::subtractOuterCoefficientwise(old, u);
   la::subtractOuterRankUpdate(rank, u);

@@ -16,12 +16,14 @@
 
 #include "mjukf/detail/linear_algebra.hpp"
 #include "mjukf/unscented_transform.hpp"
+#include "random_matrix.hpp"
 #include "test_support.hpp"
 
 namespace {
 
 using mjukf::detail::allFinite;
 using mjukf::detail::choleskyLower;
+using mjukf::testing::randomNormal;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 
 template <int N>
@@ -97,12 +99,9 @@ void expectEigensLu(const Matrix& m, const char* what) {
 
 TEST(LinearAlgebra, SmallLuIsEigensPartialPivLuBitForBit) {
   std::mt19937_64 rng(11);
-  std::normal_distribution<double> normal;
-  Eigen::Matrix<double, 6, 6> random;
-  for (double& v : random.reshaped()) v = normal(rng);
+  const auto random = randomNormal<Eigen::Matrix<double, 6, 6>>(rng);
   expectEigensLu(random, "random 6 x 6");
-  Eigen::Matrix<double, 16, 16> large;  // the bound: Eigen's last unblocked size
-  for (double& v : large.reshaped()) v = normal(rng);
+  const auto large = randomNormal<Eigen::Matrix<double, 16, 16>>(rng);  // the bound: Eigen's last unblocked size
   expectEigensLu(large, "random 16 x 16");
   // The MJUKF factors a row-major transpose, in double or float.
   const Eigen::Matrix<double, 6, 6, Eigen::RowMajor> rowMajor = random.transpose();
@@ -130,12 +129,9 @@ TEST(LinearAlgebra, SmallLuIsEigensPartialPivLuBitForBit) {
 template <int N>
 void expectBackwardStableSolves(std::uint64_t seed) {
   std::mt19937_64 rng(seed);
-  std::normal_distribution<double> normal;
   for (int trial = 0; trial < 20; ++trial) {
-    Eigen::Matrix<double, N, N> m;
-    Eigen::Matrix<double, N, 3> b;
-    for (double& v : m.reshaped()) v = normal(rng);
-    for (double& v : b.reshaped()) v = normal(rng);
+    auto m = randomNormal<Eigen::Matrix<double, N, N>>(rng);
+    const auto b = randomNormal<Eigen::Matrix<double, N, 3>>(rng);
     m.row(0).swap(m.row(N - 1));
     const auto lu = mjukf::detail::partialPivotLu(m);
     Eigen::Matrix<double, N, 3> x = b;
@@ -175,11 +171,8 @@ template <class Scalar, int R, int C, int K>
 void expectProductWithTranspose(std::mt19937_64& rng) {
   using la = mjukf::detail::ProductPart;
   using Into = mjukf::detail::ProductInto;
-  std::normal_distribution<double> normal;
-  Eigen::Matrix<Scalar, R, K> a;
-  Eigen::Matrix<Scalar, C, K> b;
-  for (Scalar& v : a.reshaped()) v = Scalar(normal(rng));
-  for (Scalar& v : b.reshaped()) v = Scalar(normal(rng));
+  const auto a = randomNormal<Eigen::Matrix<Scalar, R, K>>(rng);
+  const auto b = randomNormal<Eigen::Matrix<Scalar, C, K>>(rng);
   const Eigen::Matrix<long double, R, C> exact =
       a.template cast<long double>() * b.template cast<long double>().transpose();
   const double eps = std::numeric_limits<Scalar>::epsilon();
@@ -250,14 +243,10 @@ TEST(LinearAlgebra, CrossCovarianceOfASingleMeasurement) {
 // themselves.
 template <class Scalar, int R, int K>
 void expectColumnMapsAreEigens(std::mt19937_64& rng) {
-  std::normal_distribution<double> normal;
   using Points = Eigen::Matrix<Scalar, R, K>;
-  Points points;
-  Eigen::Matrix<Scalar, R, 1> center;
-  Eigen::Matrix<Scalar, K, 1> weights;
-  for (Scalar& v : points.reshaped()) v = Scalar(normal(rng));
-  for (Scalar& v : center.reshaped()) v = Scalar(normal(rng));
-  for (Scalar& v : weights.reshaped()) v = Scalar(normal(rng));
+  const auto points = randomNormal<Points>(rng);
+  const auto center = randomNormal<Eigen::Matrix<Scalar, R, 1>>(rng);
+  const auto weights = randomNormal<Eigen::Matrix<Scalar, K, 1>>(rng);
   const auto sameBytes = [](const auto& a, const auto& b) {
     for (int k = 0; k < K; ++k)
       for (int i = 0; i < R; ++i)
@@ -296,13 +285,9 @@ void expectColumnMapsAreEigens(std::mt19937_64& rng) {
 TEST(LinearAlgebra, ColumnMapsReadStridedWeightsAndCentresByValue) {
   constexpr int L = 12, Count = 2 * L + 1;
   std::mt19937_64 rng(20);
-  std::normal_distribution<double> normal;
-  Eigen::Matrix<double, L, Count> d;
-  Eigen::Matrix<double, 2, Count> weightRows;
-  Eigen::Matrix<double, 2, L> centreRows;
-  for (double& v : d.reshaped()) v = normal(rng);
-  for (double& v : weightRows.reshaped()) v = normal(rng);
-  for (double& v : centreRows.reshaped()) v = normal(rng);
+  const auto d = randomNormal<Eigen::Matrix<double, L, Count>>(rng);
+  const auto weightRows = randomNormal<Eigen::Matrix<double, 2, Count>>(rng);
+  const auto centreRows = randomNormal<Eigen::Matrix<double, 2, L>>(rng);
   const Eigen::Matrix<double, Count, 1> weights = weightRows.row(1).transpose();
   const Eigen::Matrix<double, L, 1> centre = centreRows.row(1).transpose();
   Eigen::Matrix<double, L, Count> fromPlain, fromStrided;
@@ -339,11 +324,8 @@ TEST(LinearAlgebra, ColumnMapsAreEigensExpressionsBitForBit) {
 #if defined(__x86_64__) && !defined(__FMA__)
 TEST(LinearAlgebra, ProductWithTransposeHasEigensBitsOnX86) {
   std::mt19937_64 rng(18);
-  std::normal_distribution<double> normal;
-  Eigen::Matrix<double, 36, 73> a;
-  Eigen::Matrix<double, 16, 73> b;
-  for (double& v : a.reshaped()) v = normal(rng);
-  for (double& v : b.reshaped()) v = normal(rng);
+  const auto a = randomNormal<Eigen::Matrix<double, 36, 73>>(rng);
+  const auto b = randomNormal<Eigen::Matrix<double, 16, 73>>(rng);
   Eigen::Matrix<double, 36, 16> mine, eigens;
   mjukf::detail::productWithTranspose<mjukf::detail::ProductPart::Full, mjukf::detail::ProductInto::Assign>(a, b, mine);
   eigens.noalias() = a * b.transpose();

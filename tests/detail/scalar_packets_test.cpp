@@ -8,8 +8,11 @@
 #include <gtest/gtest.h>
 
 #include "mjukf/detail/linear_algebra.hpp"
+#include "random_matrix.hpp"
 
 namespace {
+
+using mjukf::testing::randomNormal;
 
 static_assert(mjukf::detail::kScalarPackets<float> && mjukf::detail::kScalarPackets<double>,
               "this test is built without Eigen's vectorisation");
@@ -20,11 +23,8 @@ static_assert(mjukf::detail::kScalarPackets<float> && mjukf::detail::kScalarPack
 // below (L = 4 here), the two are one form.
 template <class Scalar, int N, int Count>
 void expectChosenCovarianceIsTheHeldOne(std::mt19937_64& rng) {
-  std::normal_distribution<double> normal;
-  Eigen::Matrix<Scalar, N, Count> d;
-  Eigen::Matrix<Scalar, Count, 1> w;
-  for (Scalar& v : d.reshaped()) v = Scalar(normal(rng));
-  for (Scalar& v : w.reshaped()) v = Scalar(normal(rng));
+  const auto d = randomNormal<Eigen::Matrix<Scalar, N, Count>>(rng);
+  const auto w = randomNormal<Eigen::Matrix<Scalar, Count, 1>>(rng);
   Eigen::Matrix<Scalar, N, N> held = Eigen::Matrix<Scalar, N, N>::Zero(), chosen = held;
   mjukf::detail::weightedCovarianceLowerCoefficientwise(d, w, held);
   mjukf::detail::weightedCovarianceLower(d, w, chosen);
@@ -55,11 +55,8 @@ TEST(ScalarPackets, CovarianceKernelChosenBySizeHasTheHeldFormsBits) {
 // measurement deviations) it gives what colwise() −= gives, byte for byte.
 TEST(ScalarPackets, DeviationsInPlaceAreColwiseSubtraction) {
   std::mt19937_64 rng(23);
-  std::normal_distribution<double> normal;
-  Eigen::Matrix<float, 4, 9> points;
-  Eigen::Matrix<float, 4, 1> centre;
-  for (float& v : points.reshaped()) v = float(normal(rng));
-  for (float& v : centre.reshaped()) v = float(normal(rng));
+  auto points = randomNormal<Eigen::Matrix<float, 4, 9>>(rng);
+  const auto centre = randomNormal<Eigen::Matrix<float, 4, 1>>(rng);
   Eigen::Matrix<float, 4, 9> expected = points;
   expected.colwise() -= centre;
   mjukf::detail::deviationsFrom(points, centre, points);

@@ -15,6 +15,7 @@
 #include "mjukf/models/flexible_joint.hpp"
 #include "mjukf/modified_joint_ukf.hpp"
 #include "mjukf/ukf.hpp"
+#include "random_matrix.hpp"
 
 namespace mjukf::testing {
 
@@ -57,16 +58,6 @@ struct CountingStepper {
     return inner.step(f, t, x, h);
   }
 };
-
-/// A fixed-size matrix of independent standard normal entries, drawn row by row.
-template <class Matrix>
-Matrix randomNormal(std::mt19937_64& rng) {
-  std::normal_distribution<double> normal;
-  Matrix m;
-  for (int i = 0; i < m.rows(); ++i)
-    for (int j = 0; j < m.cols(); ++j) m(i, j) = normal(rng);
-  return m;
-}
 
 /// A symmetric N × N matrix, A + Aᵀ of a standard normal A: indefinite, in general.
 template <int N>
