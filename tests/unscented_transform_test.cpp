@@ -12,18 +12,14 @@ namespace {
 
 TEST(UnscentedTransform, ReproducesLinearMapMeanAndCovariance) {
   std::mt19937_64 rng(7);
-  std::normal_distribution<double> normal;
   const mjukf::SigmaPointParameters<double> sets[] = {{1.0, 2.0, 0.0}, {0.3, 2.0, 1.0}, {1.0, 0.0, 2.0}};
   for (int trial = 0; trial < 30; ++trial) {
     const auto& p = sets[trial % 3];
     mjukf::MerweScaledSigmaPoints<double, 4> sigma(p);
     const Eigen::Matrix4d P = mjukf::testing::randomCovariance<4>(rng);
-    Eigen::Vector4d x;
-    Eigen::Matrix<double, 3, 4> A;
-    Eigen::Vector3d b;
-    for (int i = 0; i < 4; ++i) x(i) = normal(rng);
-    for (int i = 0; i < 12; ++i) A(i) = normal(rng);
-    for (int i = 0; i < 3; ++i) b(i) = normal(rng);
+    const auto x = mjukf::testing::randomNormal<Eigen::Vector4d>(rng);
+    const auto A = mjukf::testing::randomNormal<Eigen::Matrix<double, 3, 4>>(rng);
+    const auto b = mjukf::testing::randomNormal<Eigen::Vector3d>(rng);
 
     mjukf::MerweScaledSigmaPoints<double, 4>::Points points;
     ASSERT_EQ(sigma.generate(x, P, points), mjukf::Status::Ok);
