@@ -411,21 +411,25 @@ void productWithTranspose(const Eigen::MatrixBase<A>& a, const Eigen::MatrixBase
     }
     // The rows below the last full block: one packet of them if there are enough, then one row at a
     // time, each with the block's columns summed side by side (independent sums, not one long chain).
+    // i ≥ blockedRows: a packet of rows fits only if R − blockedRows ≥ kPacket. Said at compile time, this
+    // also keeps GCC from warning of out-of-range rows in a branch it cannot prove dead.
     int i = std::max(blockedRows, firstRow);
-    if (kPacket > 1 && R - i >= kPacket) {
-      Packet sum[kCols];
-      for (int c = 0; c < kCols; ++c) sum[c] = Eigen::internal::pset1<Packet>(Scalar(0));
-      for (int k = 0; k < K; ++k) {
-        const Packet rows = Eigen::internal::ploadu<Packet>(pa + i + k * strideA);
-        for (int c = 0; c < cols; ++c)
-          sum[c] = Eigen::internal::pmadd(rows, Eigen::internal::pset1<Packet>(pb[j0 + c + k * strideB]), sum[c]);
+    if constexpr (kPacket > 1 && R - blockedRows >= kPacket) {
+      if (R - i >= kPacket) {
+        Packet sum[kCols];
+        for (int c = 0; c < kCols; ++c) sum[c] = Eigen::internal::pset1<Packet>(Scalar(0));
+        for (int k = 0; k < K; ++k) {
+          const Packet rows = Eigen::internal::ploadu<Packet>(pa + i + k * strideA);
+          for (int c = 0; c < cols; ++c)
+            sum[c] = Eigen::internal::pmadd(rows, Eigen::internal::pset1<Packet>(pb[j0 + c + k * strideB]), sum[c]);
+        }
+        Scalar tile[kPacket];
+        for (int c = 0; c < cols; ++c) {
+          Eigen::internal::pstoreu(tile, sum[c]);
+          for (int r = 0; r < kPacket; ++r) put(i + r, j0 + c, tile[r]);
+        }
+        i += kPacket;
       }
-      Scalar tile[kPacket];
-      for (int c = 0; c < cols; ++c) {
-        Eigen::internal::pstoreu(tile, sum[c]);
-        for (int r = 0; r < kPacket; ++r) put(i + r, j0 + c, tile[r]);
-      }
-      i += kPacket;
     }
     for (; i < R; ++i) {
       Scalar sum[kCols] = {};
