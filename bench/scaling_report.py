@@ -152,6 +152,23 @@ def border_cell(kernels, kernel, written, general):
     return f"{cell} ({notes})" if notes else cell
 
 
+KERNEL_SECTION = "## The kernels chosen by size, and their thresholds"
+
+
+def kept_section(page, heading):
+    """The section of an existing page under `heading`, up to the next section of the same level, or ""."""
+    try:
+        with open(page, encoding="utf-8") as f:
+            lines = f.read().splitlines()
+    except OSError:
+        return ""
+    if heading not in lines:
+        return ""
+    start = lines.index(heading)
+    end = next((i for i in range(start + 1, len(lines)) if lines[i].startswith("## ")), len(lines))
+    return "\n".join(lines[start:end]).rstrip()
+
+
 def fmt(x, digits=2):
     return "–" if math.isnan(x) else f"{x:.{digits}f}"
 
@@ -239,8 +256,14 @@ def main():
                   f"{fmt(exponent(rows, key, p, 'old'))} | {fmt(exponent(rows, key, p, 'floor'))} |")
         w("")
 
+    # The kernel micro-benchmark is optional and slow (MJUKF_SCALING_KERNELS=1): a run without it keeps
+    # the section of the page it replaces, whose own line says at which commit it was measured.
+    previous_kernels = "" if kernels else kept_section(output, KERNEL_SECTION)
+    if previous_kernels:
+        w(previous_kernels)
+        w("")
     if kernels:
-        w("## The kernels chosen by size, and their thresholds\n")
+        w(f"{KERNEL_SECTION}\n")
         w("`mjukf_kernel_bench` (`bench/kernel_size_bench.cpp`): each kernel of `detail/linear_algebra.hpp`")
         w("that is chosen by size, in each of its forms, on a point set of 2L + 1 points, ns per call")
         w("(median of 5, the fastest form of each kernel in bold). covariance: Σ Wᵢ dᵢ dᵢᵀ (L × L);")
