@@ -27,6 +27,8 @@ LABELS = {"ukf": "UKF", "jukf": "JUKF", "mjukf": "MJUKF", "mjukf_auto": "MJUKF a
 SQUARE_ROOT = "_sr"
 GOAL_FILTERS = ["ukf", "jukf", "mjukf"]
 UNIT_NS = {"ns": 1.0, "us": 1e3, "ms": 1e6, "s": 1e9}
+# The heading of the notes' section on what was measured since the last full run (bench/performance_notes.md).
+BETWEEN_RUNS = "## Measured between full runs"
 
 
 def load(path):
@@ -170,6 +172,11 @@ def main():
     for g, m, ok in goals:
         w(f"| {g} | {m} | {'met' if ok else '**missed**'} |")
     w("")
+    notes = os.path.join(os.path.dirname(os.path.abspath(__file__)), "performance_notes.md")
+    if os.path.exists(notes) and BETWEEN_RUNS in open(notes, encoding="utf-8").read().splitlines():
+        w("Measured on later code without regenerating this page: [Measured between full runs]"
+          "(#measured-between-full-runs), below.")
+        w("")
     w("The scripts' times (1.06 s robot, 25.5 s tank: one run each of the reference Python scripts on a")
     w("2-core machine of the same kind) were not measured by `scripts/bench.sh`; the cold-run ratios")
     w("compare this machine's `estimate` with those recorded times.")
@@ -339,9 +346,8 @@ def main():
         w(row)
     w("")
 
-    notes = os.path.join(os.path.dirname(os.path.abspath(__file__)), "performance_notes.md")
     if os.path.exists(notes):
-        w(open(notes).read().rstrip())
+        w(open(notes, encoding="utf-8").read().rstrip())
         w("")
     with open(out, "w") as f:
         f.write("\n".join(lines))
