@@ -153,10 +153,21 @@ def border_cell(kernels, kernel, written, general):
 
 
 KERNEL_SECTION = "## The kernels chosen by size, and their thresholds"
+COMPILE_SECTION = "## Compile time and peak memory"
+NOTES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "compile_time_notes.md")
+
+
+def notes_lines():
+    """The hand-written notes the page ends with (bench/compile_time_notes.md), less its comment lines."""
+    if not os.path.exists(NOTES):
+        return []
+    with open(NOTES, encoding="utf-8") as f:
+        return [line for line in f.read().splitlines() if not line.startswith("<!--")]
 
 
 def kept_section(page, heading):
-    """The section of an existing page under `heading`, up to the next section of the same level, or ""."""
+    """The section of an existing page under `heading`, up to the next section of the same level or the
+    notes the page ends with, whichever comes first; "" if the page or the section is not there."""
     try:
         with open(page, encoding="utf-8") as f:
             lines = f.read().splitlines()
@@ -165,7 +176,9 @@ def kept_section(page, heading):
     if heading not in lines:
         return ""
     start = lines.index(heading)
-    end = next((i for i in range(start + 1, len(lines)) if lines[i].startswith("## ")), len(lines))
+    notes = next((line for line in notes_lines() if line.strip()), None)
+    end = next((i for i in range(start + 1, len(lines)) if lines[i].startswith("## ") or lines[i] == notes),
+               len(lines))
     return "\n".join(lines[start:end]).rstrip()
 
 
@@ -313,8 +326,12 @@ def main():
             w("")
 
     cost_path = os.path.join(results, "compile_cost.txt")
+    previous_cost = "" if os.path.exists(cost_path) else kept_section(output, COMPILE_SECTION)
+    if previous_cost:  # compile_cost.sh is optional too (MJUKF_SCALING_COMPILE=1)
+        w(previous_cost)
+        w("")
     if os.path.exists(cost_path):
-        w("## Compile time and peak memory\n")
+        w(f"{COMPILE_SECTION}\n")
         w("`bash scripts/compile_cost.sh`: one translation unit per filter on the chain (p = 4, RK4) at")
         w("n = 4 and n = 32, and one with all four filters at n = 4, `g++ -std=c++17 -O2 -c`, from")
         w("`/usr/bin/time -v`: the compiler's CPU time (user + system; on the shared machine the wall-clock")
@@ -335,9 +352,8 @@ def main():
                   f"{float(m.group(4)):.1f} | {int(m.group(5)) / 1024:,.0f} |")
         w("")
     # Measurements of where the compile time goes, written by hand (bench/compile_time_notes.md).
-    notes = os.path.join(os.path.dirname(os.path.abspath(__file__)), "compile_time_notes.md")
-    if os.path.exists(notes):
-        w("".join(line for line in open(notes, encoding="utf-8") if not line.startswith("<!--")))
+    if os.path.exists(NOTES):
+        w("\n".join(notes_lines()))
 
     with open(output, "w") as f:
         f.write("\n".join(out).rstrip() + "\n")

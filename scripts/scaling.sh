@@ -14,8 +14,9 @@
 #   MJUKF_SCALING_MIN_TIME=0.2 bash scripts/scaling.sh # Google Benchmark's time per repetition (default 0.5 s)
 #
 # JSON goes to <build-dir>/results/. Results already there from an earlier run (kernels.json,
-# compile_cost.txt) are reported again when not re-measured; without kernels.json (a fresh build
-# directory), the kernels' section of the page it replaces is kept as it was, with its own commit.
+# compile_cost.txt) are reported again when not re-measured; without them (a fresh build directory),
+# the kernels' and the compile time's sections of the page it replaces are kept as they were, each
+# with its own commit.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build-bench}
