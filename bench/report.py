@@ -172,8 +172,9 @@ def main():
     for g, m, ok in goals:
         w(f"| {g} | {m} | {'met' if ok else '**missed**'} |")
     w("")
-    notes = os.path.join(os.path.dirname(os.path.abspath(__file__)), "performance_notes.md")
-    if os.path.exists(notes) and BETWEEN_RUNS in open(notes, encoding="utf-8").read().splitlines():
+    notes_path = os.path.join(os.path.dirname(os.path.abspath(__file__)), "performance_notes.md")
+    notes = open(notes_path, encoding="utf-8").read().rstrip() if os.path.exists(notes_path) else ""
+    if BETWEEN_RUNS in notes.splitlines():
         w("Measured on later code without regenerating this page: [Measured between full runs]"
           "(#measured-between-full-runs), below.")
         w("")
@@ -346,8 +347,8 @@ def main():
         w(row)
     w("")
 
-    if os.path.exists(notes):
-        w(open(notes, encoding="utf-8").read().rstrip())
+    if notes:
+        w(notes)
         w("")
     with open(out, "w") as f:
         f.write("\n".join(lines))
